@@ -1,0 +1,101 @@
+#include "src/cli/args.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "src/core/types.h"
+
+namespace estlab::cli {
+
+namespace {
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> parts;
+  std::string cur;
+  std::istringstream in(s);
+  while (std::getline(in, cur, sep)) parts.push_back(cur);
+  if (!s.empty() && s.back() == sep) parts.push_back("");
+  return parts;
+}
+}  // namespace
+
+double ParseNumber(const std::string& raw, const std::string& option) {
+  const std::string text = Trim(raw);
+  if (text.empty()) throw InputError(option + ": empty value where a number was expected");
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) {
+    throw InputError(option + ": '" + text + "' is not a number");
+  }
+  if (!std::isfinite(v) || errno == ERANGE) {
+    throw InputError(option + ": '" + text + "' is not a finite number");
+  }
+  return v;
+}
+
+std::vector<double> ParseList(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  for (const auto& part : Split(text, ',')) out.push_back(ParseNumber(part, option));
+  if (out.empty()) throw InputError(option + ": empty list");
+  return out;
+}
+
+std::vector<std::pair<std::string, double>> ParseAssignments(const std::vector<std::string>& items,
+                                                             const std::string& option) {
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& item : items) {
+    for (const auto& part : Split(item, ',')) {
+      const auto eq = part.find('=');
+      if (eq == std::string::npos) {
+        throw InputError(option + ": expected name=value, got '" + Trim(part) + "'");
+      }
+      out.emplace_back(Trim(part.substr(0, eq)), ParseNumber(part.substr(eq + 1), option));
+    }
+  }
+  return out;
+}
+
+std::vector<double> ParseMatrix(const std::string& text, int n, const std::string& option) {
+  std::vector<double> out;
+  const auto rows = Split(text, ';');
+  if (int(rows.size()) != n) {
+    throw InputError(option + ": expected " + std::to_string(n) + " rows separated by ';', got " +
+                     std::to_string(rows.size()));
+  }
+  for (const auto& row : rows) {
+    const auto values = ParseList(row, option);
+    if (int(values.size()) != n) {
+      throw InputError(option + ": expected " + std::to_string(n) + " values per row, got " +
+                       std::to_string(values.size()) + " in '" + Trim(row) + "'");
+    }
+    out.insert(out.end(), values.begin(), values.end());
+  }
+  return out;
+}
+
+void RequireLength(const std::vector<double>& v, size_t n, const std::string& option,
+                   const std::string& what) {
+  if (v.size() != n) {
+    throw InputError(option + ": expected " + std::to_string(n) + " values (" + what + "), got " +
+                     std::to_string(v.size()));
+  }
+}
+
+void RequireNonNegative(const std::vector<double>& v, const std::string& option) {
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (v[i] < 0) {
+      throw InputError(option + ": variance " + std::to_string(i + 1) + " is negative (" +
+                       std::to_string(v[i]) + ")");
+    }
+  }
+}
+
+}  // namespace estlab::cli

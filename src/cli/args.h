@@ -1,0 +1,28 @@
+// Strict parsing of command-line values: every number must parse completely
+// and be finite; errors name the option and the offending text.
+#ifndef ESTLAB_CLI_ARGS_H_
+#define ESTLAB_CLI_ARGS_H_
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace estlab::cli {
+
+// "1.5" -> 1.5; throws InputError("<option>: ...") on junk, NaN or inf.
+double ParseNumber(const std::string& text, const std::string& option);
+// "1,2,3" -> {1,2,3}
+std::vector<double> ParseList(const std::string& text, const std::string& option);
+// "a=1,b=2" (also repeated options) -> {{"a",1},{"b",2}}
+std::vector<std::pair<std::string, double>> ParseAssignments(const std::vector<std::string>& items,
+                                                             const std::string& option);
+// "a,b;c,d" -> row-major square matrix of size n (throws on wrong shape).
+std::vector<double> ParseMatrix(const std::string& text, int n, const std::string& option);
+
+void RequireLength(const std::vector<double>& v, size_t n, const std::string& option,
+                   const std::string& what);
+void RequireNonNegative(const std::vector<double>& v, const std::string& option);
+
+}  // namespace estlab::cli
+
+#endif  // ESTLAB_CLI_ARGS_H_

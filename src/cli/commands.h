@@ -1,0 +1,16 @@
+// The estlab subcommands. Each takes the arguments after its name, returns the
+// process exit status, and throws InputError for bad input (exit 2).
+#ifndef ESTLAB_CLI_COMMANDS_H_
+#define ESTLAB_CLI_COMMANDS_H_
+
+#include <string>
+#include <vector>
+
+namespace estlab::cli {
+
+int RunSimulate(const std::vector<std::string>& args);
+int RunList(const std::vector<std::string>& args);
+
+}  // namespace estlab::cli
+
+#endif  // ESTLAB_CLI_COMMANDS_H_

@@ -1,0 +1,75 @@
+// estlab: nonlinear state estimation from one command line.
+#include <boost/program_options/errors.hpp>
+#include <cstring>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "estlab_version.h"
+#include "src/cli/commands.h"
+#include "src/core/types.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  std::function<int(const std::vector<std::string>&)> run;
+};
+
+const std::vector<Command>& Commands() {
+  static const std::vector<Command> commands = {
+      {"simulate", "integrate a model (CVODES or fixed step), add noise, write a CSV",
+       estlab::cli::RunSimulate},
+      {"list", "list models, measurements, parameters and integrators", estlab::cli::RunList},
+  };
+  return commands;
+}
+
+void PrintUsage(std::ostream& out) {
+  out << "estlab " << ESTLAB_VERSION << " - nonlinear state estimation research toolkit\n\n"
+      << "Usage: estlab COMMAND [OPTIONS]\n       estlab COMMAND --help\n\nCommands:\n";
+  for (const auto& c : Commands()) {
+    out << "  " << c.name << std::string(12 - std::strlen(c.name), ' ') << c.summary << "\n";
+  }
+  out << "\nOptions:\n  --help       this text\n  --version    version and git commit\n\n"
+      << "Examples:\n"
+      << "  estlab list\n"
+      << "  estlab simulate --model double-pendulum --x0 theta1=0.785398,theta2=0.523599 \\\n"
+      << "      --t-end 10 --dt 0.01 --measure angles --meas-noise-var 0.0025,0.0016 --out traj.csv\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    PrintUsage(std::cout);
+    return args.empty() ? 2 : 0;
+  }
+  if (args[0] == "--version") {
+    std::cout << "estlab " << ESTLAB_VERSION << " (git " << ESTLAB_GIT_COMMIT << ")\n";
+    return 0;
+  }
+  const std::string name = args[0];
+  args.erase(args.begin());
+  for (const auto& c : Commands()) {
+    if (c.name != name) continue;
+    try {
+      return c.run(args);
+    } catch (const estlab::InputError& e) {
+      std::cerr << "estlab: error: " << e.what() << "\n";
+      return 2;
+    } catch (const boost::program_options::error& e) {
+      std::cerr << "estlab: error: " << e.what() << " (see 'estlab " << name << " --help')\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "estlab: error: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  std::cerr << "estlab: error: unknown command '" << name << "' (see 'estlab --help')\n";
+  return 2;
+}

@@ -1,0 +1,48 @@
+// Core types shared by every part of estlab: fixed-size Eigen aliases, the
+// error type for bad user input, and small numeric helpers.
+//
+// Usage:
+//   estlab::Vec<double, 4> x = estlab::Vec<double, 4>::Zero();
+//   if (!(dt > 0)) throw estlab::InputError("--dt must be > 0, got " + ...);
+#ifndef ESTLAB_CORE_TYPES_H_
+#define ESTLAB_CORE_TYPES_H_
+
+#include <Eigen/Core>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace estlab {
+
+template <class T, int N>
+using Vec = Eigen::Matrix<T, N, 1>;
+
+template <int R, int C>
+using Mat = Eigen::Matrix<double, R, C>;
+
+// Bad user input: unknown names, wrong lengths, non-finite numbers,
+// non-positive-definite covariances, malformed files. The CLI prints
+// "estlab: error: <what()>" and exits with status 2.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A numerical failure during a run (CVODES error, divergence). The CLI exits
+// with status 1 and keeps what was computed so far.
+class NumericalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Wraps an angle to (-pi, pi].
+inline double WrapAngle(double a) {
+  constexpr double kPi = 3.14159265358979323846;
+  double w = std::remainder(a, 2.0 * kPi);  // in [-pi, pi]
+  if (w <= -kPi) w += 2.0 * kPi;
+  return w;
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_CORE_TYPES_H_

@@ -1,0 +1,49 @@
+// Files that appear whole or not at all: text goes to "<path>.tmp.<pid>" and
+// is renamed onto <path> by Commit(). A file never committed is removed, so a
+// failed command leaves no partial output under the requested name.
+//
+// Usage:
+//   OutputFile out("traj.csv");          // throws InputError if unwritable
+//   out.stream() << "t,theta\n";
+//   out.Commit();
+#ifndef ESTLAB_IO_OUTPUT_FILE_H_
+#define ESTLAB_IO_OUTPUT_FILE_H_
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace estlab {
+
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  std::ostream& stream() { return stream_; }
+  // Flushes, checks for write errors, renames into place. Throws InputError.
+  void Commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::string tmp_path_;
+  std::ofstream stream_;
+  bool committed_ = false;
+};
+
+// "%.17g", the shortest text that reads back to the same double.
+std::string FormatDouble(double v);
+
+// Writes a CSV with a header row; values with FormatDouble, NaN as empty cell.
+void WriteCsv(std::ostream& out, const std::vector<std::string>& columns,
+              const std::vector<std::vector<double>>& rows);
+
+// Writes a whole text file atomically.
+void WriteTextFile(const std::string& path, const std::string& text);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_IO_OUTPUT_FILE_H_

@@ -1,0 +1,70 @@
+// Fixed-step integrators templated on the scalar type, so that a step can be
+// differentiated exactly with ceres::Jet (EKF Jacobians, tuner gradients).
+//
+//   euler:               x+ = x + h f(t, x)
+//   semi-implicit-euler: velocities first, then positions with the new
+//                        velocities (paper 003):  v+ = v + h a(t, q, v),
+//                        q+ = q + h q'(t, q, v+)
+//   rk4:                 classical fourth-order Runge-Kutta
+#ifndef ESTLAB_ODE_FIXED_STEP_H_
+#define ESTLAB_ODE_FIXED_STEP_H_
+
+#include "src/core/types.h"
+#include "src/ode/transition.h"
+
+namespace estlab {
+
+template <class Model, class T>
+Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kStateDim>& x, double t,
+                                   double h, double u, const typename Model::Params& p) {
+  using State = Vec<T, Model::kStateDim>;
+  const T tt(t);
+  switch (scheme) {
+    case Integrator::kEuler:
+      return x + h * Model::Rhs(tt, x, u, p);
+    case Integrator::kSemiImplicitEuler: {
+      const State f = Model::Rhs(tt, x, u, p);
+      State next = x;
+      for (const auto& [pos, rate] : Model::kPositionRatePairs) next(rate) = x(rate) + h * f(rate);
+      const State g = Model::Rhs(tt, next, u, p);
+      for (const auto& [pos, rate] : Model::kPositionRatePairs) next(pos) = x(pos) + h * g(pos);
+      return next;
+    }
+    case Integrator::kRk4:
+    default: {
+      const T half(t + 0.5 * h), full(t + h);
+      const State k1 = Model::Rhs(tt, x, u, p);
+      const State k2 = Model::Rhs(half, State(x + (0.5 * h) * k1), u, p);
+      const State k3 = Model::Rhs(half, State(x + (0.5 * h) * k2), u, p);
+      const State k4 = Model::Rhs(full, State(x + h * k3), u, p);
+      return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+  }
+}
+
+// Number of right-hand side evaluations per step of `scheme`.
+inline int RhsEvalsPerStep(Integrator scheme) {
+  switch (scheme) {
+    case Integrator::kEuler:
+      return 1;
+    case Integrator::kSemiImplicitEuler:
+      return 2;
+    default:
+      return 4;
+  }
+}
+
+// `substeps` equal steps from t0 to t1.
+template <class Model, class T>
+Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::kStateDim>& x0,
+                                        double t0, double t1, int substeps, double u,
+                                        const typename Model::Params& p) {
+  const double h = (t1 - t0) / substeps;
+  Vec<T, Model::kStateDim> x = x0;
+  for (int i = 0; i < substeps; ++i) x = FixedStep<Model, T>(scheme, x, t0 + i * h, h, u, p);
+  return x;
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_ODE_FIXED_STEP_H_

@@ -1,0 +1,42 @@
+#include "src/ode/transition.h"
+
+#include <cmath>
+
+namespace estlab {
+
+Integrator ParseIntegrator(const std::string& name) {
+  if (name == "euler") return Integrator::kEuler;
+  if (name == "semi-implicit-euler") return Integrator::kSemiImplicitEuler;
+  if (name == "rk4") return Integrator::kRk4;
+  if (name == "cvodes") return Integrator::kCvodes;
+  throw InputError("unknown integrator '" + name +
+                   "' (expected euler, semi-implicit-euler, rk4 or cvodes)");
+}
+
+const char* IntegratorName(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kEuler:
+      return "euler";
+    case Integrator::kSemiImplicitEuler:
+      return "semi-implicit-euler";
+    case Integrator::kRk4:
+      return "rk4";
+    case Integrator::kCvodes:
+      return "cvodes";
+  }
+  return "?";
+}
+
+bool TransitionOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (substeps < 1) return fail("--substeps must be >= 1, got " + std::to_string(substeps));
+  if (!(std::isfinite(rtol) && rtol > 0)) return fail("--rtol must be > 0 and finite");
+  if (!(std::isfinite(atol) && atol > 0)) return fail("--atol must be > 0 and finite");
+  if (max_steps < 1) return fail("--max-steps must be >= 1");
+  return true;
+}
+
+}  // namespace estlab

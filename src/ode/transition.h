@@ -1,0 +1,88 @@
+// Discrete transitions x(t1) = Phi(x(t0); t0, t1, u) of a continuous model,
+// and their flow Jacobians dPhi/dx(t0). These are the process models of the
+// filters and the truth generator of the simulator.
+//
+// Usage:
+//   auto transition = MakeTransition<models::Pendulum>(params, options);
+//   transition->SetInput(0.0);
+//   Vec<double, 2> x1 = transition->Step(x0, 0.0, 0.01);
+//   Mat<2, 2> F;
+//   x1 = transition->StepWithJacobian(x0, 0.0, 0.01, &F);
+//
+// WARNING: a Transition is not thread-safe (CVODES keeps solver memory in the
+// instance); make one per thread. Step throws NumericalError when the
+// integrator fails (e.g. CVODES "too much work"); filters turn that into a
+// status.
+#ifndef ESTLAB_ODE_TRANSITION_H_
+#define ESTLAB_ODE_TRANSITION_H_
+
+#include <memory>
+#include <string>
+
+#include "src/core/types.h"
+
+namespace estlab {
+
+enum class Integrator { kEuler, kSemiImplicitEuler, kRk4, kCvodes };
+enum class CvodesMethod { kDefault, kBdf, kAdams };
+
+// Parses "euler", "semi-implicit-euler", "rk4", "cvodes"; throws InputError.
+Integrator ParseIntegrator(const std::string& name);
+const char* IntegratorName(Integrator integrator);
+
+struct TransitionOptions {
+  Integrator integrator = Integrator::kCvodes;
+  // Fixed-step integrators: number of equal substeps per Step() call.
+  int substeps = 1;
+  // CVODES settings. kDefault = BDF for stiff models, Adams otherwise.
+  CvodesMethod method = CvodesMethod::kDefault;
+  double rtol = 1e-10;
+  double atol = 1e-12;
+  long max_steps = 500000;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct TransitionStats {
+  long rhs_evals = 0;       // right-hand side evaluations f(t, x)
+  long jacobian_evals = 0;  // evaluations of df/dx (AD)
+  long internal_steps = 0;  // integrator steps taken
+};
+
+template <class Model>
+class Transition {
+ public:
+  static constexpr int kN = Model::kStateDim;
+  using State = Vec<double, kN>;
+  using Jacobian = Mat<kN, kN>;
+  using Params = typename Model::Params;
+
+  explicit Transition(const Params& params) : params_(params) {}
+  virtual ~Transition() = default;
+
+  // x(t1) from x(t0) with the input held at the value of SetInput.
+  virtual State Step(const State& x, double t0, double t1) = 0;
+  // Same, and *flow_jacobian = dx(t1)/dx(t0).
+  virtual State StepWithJacobian(const State& x, double t0, double t1,
+                                 Jacobian* flow_jacobian) = 0;
+  virtual std::string Name() const = 0;
+
+  void SetInput(double u) { input_ = u; }
+  double input() const { return input_; }
+  const Params& params() const { return params_; }
+  const TransitionStats& stats() const { return stats_; }
+
+ protected:
+  Params params_;
+  double input_ = 0.0;
+  TransitionStats stats_;
+};
+
+// Factory defined in src/ode/transition_impl.h, instantiated per model.
+template <class Model>
+std::unique_ptr<Transition<Model>> MakeTransition(const typename Model::Params& params,
+                                                  const TransitionOptions& options);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_ODE_TRANSITION_H_

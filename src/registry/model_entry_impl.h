@@ -1,0 +1,54 @@
+// Builds a model's registry entry from its compile-time description. Include
+// only from src/models_inst/<model>.cpp.
+#ifndef ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
+#define ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
+
+#include "src/ode/transition_impl.h"
+#include "src/registry/model_traits.h"
+#include "src/registry/registry.h"
+#include "src/sim/simulator_impl.h"
+
+namespace estlab {
+
+template <class Model>
+ModelEntry MakeModelEntry() {
+  ModelEntry e;
+  e.name = Model::kName;
+  e.description = Model::kDescription;
+  for (int i = 0; i < Model::kStateDim; ++i) {
+    e.states.push_back(Model::kStateNames[i]);
+    e.angle_states.push_back(Model::kAngleStates[i]);
+  }
+  const typename Model::Params defaults{};
+  for (const auto& spec : Model::kParams)
+    e.params.push_back({spec.name, defaults.*(spec.member), spec.description, spec.constraint});
+  ForEachMeasurement<Model>([&](auto m) {
+    using Meas = decltype(m);
+    MeasurementDesc d;
+    d.name = Meas::kName;
+    for (int j = 0; j < Meas::kDim; ++j) {
+      d.outputs.push_back(Meas::kOutputs[j]);
+      d.angle_outputs.push_back(Meas::kAngleOutputs[j]);
+    }
+    e.measurements.push_back(d);
+  });
+  for (const char* s : Model::kInvariantNames) e.invariants.push_back(s);
+  e.has_input = Model::kHasInput;
+  e.stiff = Model::kStiff;
+  e.simulate = &Simulate<Model>;
+  return e;
+}
+
+}  // namespace estlab
+
+#define ESTLAB_DEFINE_MODEL_ENTRY(Model, EntryFn)                                             \
+  template std::unique_ptr<estlab::Transition<Model>> estlab::MakeTransition<Model>(          \
+      const Model::Params&, const estlab::TransitionOptions&);                                \
+  namespace estlab {                                                                          \
+  const ModelEntry& EntryFn() {                                                               \
+    static const ModelEntry entry = MakeModelEntry<Model>();                                  \
+    return entry;                                                                             \
+  }                                                                                           \
+  }
+
+#endif  // ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_

@@ -1,0 +1,91 @@
+#include "src/registry/registry.h"
+
+#include <cmath>
+
+namespace estlab {
+
+const ModelEntry& PendulumEntry();
+const ModelEntry& DoublePendulumEntry();
+const ModelEntry& CartPoleEntry();
+const ModelEntry& DipcEntry();
+const ModelEntry& VanDerPolEntry();
+
+const std::vector<const ModelEntry*>& AllModels() {
+  static const std::vector<const ModelEntry*> models = {
+      &PendulumEntry(), &DoublePendulumEntry(), &CartPoleEntry(), &DipcEntry(),
+      &VanDerPolEntry()};
+  return models;
+}
+
+namespace {
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+}  // namespace
+
+const ModelEntry& FindModel(const std::string& name) {
+  std::vector<std::string> names;
+  for (const ModelEntry* m : AllModels()) {
+    if (m->name == name) return *m;
+    names.push_back(m->name);
+  }
+  throw InputError("unknown model '" + name + "' (known: " + Join(names) + ")");
+}
+
+std::vector<double> ModelEntry::ResolveParams(
+    const std::vector<std::pair<std::string, double>>& overrides) const {
+  std::vector<double> values;
+  for (const auto& p : params) values.push_back(p.default_value);
+  for (const auto& [key, value] : overrides) {
+    bool found = false;
+    for (size_t i = 0; i < params.size(); ++i) {
+      if (params[i].name == key) {
+        CheckConstraint(name, key.c_str(), value, params[i].constraint);
+        values[i] = value;
+        found = true;
+      }
+    }
+    if (!found) {
+      std::vector<std::string> names;
+      for (const auto& p : params) names.push_back(p.name);
+      throw InputError("unknown parameter '" + key + "' for model '" + name +
+                       "' (known: " + Join(names) + ")");
+    }
+  }
+  return values;
+}
+
+int ModelEntry::StateIndex(const std::string& state) const {
+  for (size_t i = 0; i < states.size(); ++i)
+    if (states[i] == state) return int(i);
+  return -1;
+}
+
+std::vector<double> ModelEntry::ResolveState(
+    const std::vector<std::pair<std::string, double>>& values, const std::string& option) const {
+  std::vector<double> x(states.size(), 0.0);
+  for (const auto& [key, value] : values) {
+    const int i = StateIndex(key);
+    if (i < 0) {
+      throw InputError("unknown state '" + key + "' in " + option + " for model '" + name +
+                       "' (states: " + Join(states) + ")");
+    }
+    if (!std::isfinite(value)) throw InputError(option + ": value of '" + key + "' is not finite");
+    x[i] = value;
+  }
+  return x;
+}
+
+const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) const {
+  std::vector<std::string> names;
+  for (const auto& m : measurements) {
+    if (m.name == meas) return m;
+    names.push_back(m.name);
+  }
+  throw InputError("unknown measurement '" + meas + "' for model '" + name +
+                   "' (known: " + Join(names) + ")");
+}
+
+}  // namespace estlab

@@ -1,0 +1,97 @@
+// The model registry: every model's metadata (states, parameters,
+// measurements) and its per-model entry points, so the CLI can pick a model by
+// name without including any model template.
+//
+// Usage:
+//   const ModelEntry& m = FindModel("double-pendulum");   // throws InputError
+//   std::vector<double> p = m.ResolveParams({{"L1", 2.0}});
+//
+// Adding a model: one header in models/, one src/models_inst/<name>.cpp that
+// defines its entry with MakeModelEntry<Model>(), one line in registry.cpp.
+#ifndef ESTLAB_REGISTRY_REGISTRY_H_
+#define ESTLAB_REGISTRY_REGISTRY_H_
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "src/core/params.h"
+#include "src/ode/transition.h"
+
+namespace estlab {
+
+struct ParamDesc {
+  std::string name;
+  double default_value;
+  std::string description;
+  Constraint constraint;
+};
+
+struct MeasurementDesc {
+  std::string name;
+  std::vector<std::string> outputs;
+  std::vector<bool> angle_outputs;
+};
+
+// What to simulate. Vectors are already resolved to full length by the
+// registry (ResolveParams, ResolveState).
+struct SimulationSpec {
+  std::vector<double> params;  // in the model's parameter order
+  std::vector<double> x0;
+  double t_end = 10.0;
+  double dt = 0.01;
+  TransitionOptions transition;
+  double input = 0.0;
+  std::vector<double> process_noise_var;  // empty = none, else one per state
+  std::string measurement;                // empty = none
+  std::vector<double> meas_noise_var;     // empty = none, else one per output
+  uint64_t seed = 1;
+};
+
+struct SimulationResult {
+  std::vector<std::string> columns;       // t, states, z_<outputs>
+  std::vector<std::vector<double>> rows;  // one per output time computed
+  bool ok = true;
+  std::string error;  // CVODES' reason when !ok
+  long steps = 0;
+  TransitionStats stats;
+  double wall_s = 0.0;
+  // Invariants (energy, momentum) at t0 and their largest relative drift
+  // max_k |I_k - I_0| / |I_0| (absolute when I_0 = 0); empty when the model
+  // has none or they do not hold (damping, input, process noise).
+  std::vector<std::string> invariant_names;
+  std::vector<double> invariant_initial;
+  std::vector<double> invariant_drift;
+};
+
+struct ModelEntry {
+  std::string name;
+  std::string description;
+  std::vector<std::string> states;
+  std::vector<bool> angle_states;
+  std::vector<ParamDesc> params;
+  std::vector<MeasurementDesc> measurements;
+  std::vector<std::string> invariants;
+  bool has_input = false;
+  bool stiff = false;
+
+  SimulationResult (*simulate)(const SimulationSpec&) = nullptr;
+
+  // Defaults with "name=value" overrides applied and validated; throws
+  // InputError naming an unknown or invalid parameter.
+  std::vector<double> ResolveParams(const std::vector<std::pair<std::string, double>>& overrides) const;
+  // Full state from "name=value" pairs (unnamed states are 0).
+  std::vector<double> ResolveState(const std::vector<std::pair<std::string, double>>& values,
+                                   const std::string& option) const;
+  const MeasurementDesc& FindMeasurement(const std::string& name) const;
+  int StateIndex(const std::string& name) const;  // -1 when unknown
+};
+
+const std::vector<const ModelEntry*>& AllModels();
+const ModelEntry& FindModel(const std::string& name);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_REGISTRY_REGISTRY_H_
