@@ -1,0 +1,96 @@
+// The common interface of estlab's filters.
+//
+// A filter tracks a belief about the state of `Model` and is driven one
+// measurement time at a time:
+//
+//   filter.Initialize(x0, P0);
+//   for each measurement time t_k:
+//     if (k > 0) status = filter.Predict(t_{k-1}, t_k, Q);   // process model
+//     if (z_k present) StepResult r = filter.Update(z_k, R); // measurement
+//
+// Q and R are arguments, not members, so adaptation (adaptive/) and tuning
+// need no filter changes. A numerical failure (failed Cholesky, non-finite
+// values, integrator failure) is a status, never an exception or a crash.
+//
+// Measurement type `Meas` is one of Model's measurement structs (kDim,
+// kOutputs, kAngleOutputs, Eval<T>(x, params)). Innovations of angle outputs
+// are wrapped to (-pi, pi].
+#ifndef ESTLAB_FILTERS_FILTER_H_
+#define ESTLAB_FILTERS_FILTER_H_
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "src/core/types.h"
+#include "src/ode/transition.h"
+
+namespace estlab {
+
+enum class FilterStatus {
+  kOk = 0,
+  kFactorizationFailed,  // a Cholesky factorisation (P, S, P-) failed
+  kNonFinite,            // a NaN or inf appeared in the mean or covariance
+  kTransitionFailed,     // the integrator failed (e.g. CVODES too much work)
+};
+
+const char* FilterStatusName(FilterStatus status);
+
+// What one measurement update produced. log_likelihood is
+// log N(innovation; 0, innovation_cov) = -1/2 (log det S + nu^T S^-1 nu + m log 2 pi);
+// nis = nu^T S^-1 nu. For a particle filter, log_likelihood is
+// log((1/N) sum_i w_i p(z | x_i)) and innovation/innovation_cov are the
+// moments of the predicted measurement particles.
+template <int M>
+struct StepResult {
+  Vec<double, M> innovation = Vec<double, M>::Zero();
+  Mat<M, M> innovation_cov = Mat<M, M>::Identity();
+  double log_likelihood = 0.0;
+  double nis = 0.0;
+  FilterStatus status = FilterStatus::kOk;
+  std::string message;  // set when status != kOk
+
+  // For the adaptive rules: the Kalman gain K and the post-fit residual
+  // z - h(x+) (zero / unset for filters that have none).
+  Mat<Eigen::Dynamic, Eigen::Dynamic> gain;
+  Vec<double, M> residual = Vec<double, M>::Zero();
+};
+
+template <class Model, class Meas>
+class Filter {
+ public:
+  static constexpr int kN = Model::kStateDim;
+  static constexpr int kM = Meas::kDim;
+  using State = Vec<double, kN>;
+  using StateCov = Mat<kN, kN>;
+  using Measurement = Vec<double, kM>;
+  using MeasurementCov = Mat<kM, kM>;
+
+  virtual ~Filter() = default;
+  virtual std::string Name() const = 0;
+
+  // Sets the prior (mean, covariance) at the current time.
+  virtual void Initialize(const State& mean, const StateCov& cov) = 0;
+  // Propagates the belief from t0 to t1 with process-noise covariance Q
+  // (already for the step t1 - t0). The input is whatever the transition's
+  // SetInput last received.
+  virtual FilterStatus Predict(double t0, double t1, const StateCov& process_noise) = 0;
+  // Corrects with measurement z and measurement-noise covariance R.
+  virtual StepResult<kM> Update(const Measurement& z, const MeasurementCov& measurement_noise) = 0;
+
+  virtual const State& mean() const = 0;
+  virtual const StateCov& cov() const = 0;
+  virtual std::string last_error() const { return ""; }
+};
+
+// Wraps the angle components (flags[i] true) of a residual to (-pi, pi].
+template <int D, std::size_t K>
+Vec<double, D> WrapResidual(Vec<double, D> r, const std::array<bool, K>& angle_flags) {
+  for (int i = 0; i < D; ++i)
+    if (angle_flags[i]) r(i) = WrapAngle(r(i));
+  return r;
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_FILTERS_FILTER_H_
