@@ -10,6 +10,8 @@ namespace estlab::cli {
 
 int RunSimulate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);
+int RunFilterCommand(const std::vector<std::string>& args);
+
 
 }  // namespace estlab::cli
 

@@ -23,6 +23,8 @@ const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"simulate", "integrate a model (CVODES or fixed step), add noise, write a CSV",
        estlab::cli::RunSimulate},
+      {"filter", "run KF, EKF/IEKF, UKF/CKF/GHKF (optionally adaptive) or PF over a data CSV",
+       estlab::cli::RunFilterCommand},
       {"list", "list models, measurements, parameters and integrators", estlab::cli::RunList},
   };
   return commands;

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -41,6 +42,13 @@ inline double WrapAngle(double a) {
   double w = std::remainder(a, 2.0 * kPi);  // in [-pi, pi]
   if (w <= -kPi) w += 2.0 * kPi;
   return w;
+}
+
+// Short human-readable number ("%.6g") for messages.
+inline std::string FormatNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
 }
 
 }  // namespace estlab

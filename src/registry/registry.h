@@ -19,6 +19,7 @@
 
 #include "src/core/params.h"
 #include "src/ode/transition.h"
+#include "src/run/filter_spec.h"
 
 namespace estlab {
 
@@ -78,6 +79,7 @@ struct ModelEntry {
   bool stiff = false;
 
   SimulationResult (*simulate)(const SimulationSpec&) = nullptr;
+  FilterRunOutput (*run_filter)(const FilterSpec&, const FilterData&) = nullptr;
 
   // Defaults with "name=value" overrides applied and validated; throws
   // InputError naming an unknown or invalid parameter.
