@@ -26,13 +26,16 @@ inline uint64_t SplitMix64(uint64_t& state) {
 // A seed that depends only on the given integers (e.g. study seed, scenario,
 // run), never on thread count or order.
 inline uint64_t DeriveSeed(std::initializer_list<uint64_t> parts) {
-  uint64_t state = 0x243F6A8885A308D3ull;
-  uint64_t out = 0;
+  // h <- mix(h xor (odd * p + c)): mix is the bijective SplitMix64 finaliser,
+  // so for a fixed prefix distinct parts always give distinct seeds.
+  uint64_t h = 0x243F6A8885A308D3ull;
   for (uint64_t p : parts) {
-    state ^= p + 0x9E3779B97F4A7C15ull + (state << 6) + (state >> 2);
-    out = SplitMix64(state);
+    uint64_t z = h ^ (p * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    h = z ^ (z >> 31);
   }
-  return out;
+  return h;
 }
 
 class Rng {
