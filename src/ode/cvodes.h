@@ -93,6 +93,7 @@ class CvodesTransition final : public Transition<Model> {
       }
     }
     Check(CVodeSetStopTime(mem_, t1), "CVodeSetStopTime");
+    callback_error_.clear();
     sunrealtype t_reached = t0;
     const long steps_before = NumSteps();
     const int flag = CVode(mem_, t1, y_, &t_reached, CV_NORMAL);
@@ -135,6 +136,7 @@ class CvodesTransition final : public Transition<Model> {
     Check(CVodeInit(mem_, &Rhs, t0, y_), "CVodeInit");
     Check(CVodeSStolerances(mem_, options_.rtol, options_.atol), "CVodeSStolerances");
     Check(CVodeSetUserData(mem_, this), "CVodeSetUserData");
+    Check(CVodeSetErrHandlerFn(mem_, &ErrorHandler, this), "CVodeSetErrHandlerFn");
     Check(CVodeSetMaxNumSteps(mem_, options_.max_steps), "CVodeSetMaxNumSteps");
     A_ = SUNDenseMatrix(kN, kN, ctx_);
     linear_solver_ = SUNLinSol_Dense(y_, A_, ctx_);
@@ -182,6 +184,13 @@ class CvodesTransition final : public Transition<Model> {
         },
         x, &J);
     return J;
+  }
+
+  // Keeps CVODES' message for our error instead of printing it to stderr.
+  static void ErrorHandler(int /*error_code*/, const char* /*module*/, const char* function,
+                           char* msg, void* user_data) {
+    static_cast<CvodesTransition*>(user_data)->callback_error_ =
+        std::string(function) + ": " + msg;
   }
 
   static int Rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
