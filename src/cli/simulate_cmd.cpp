@@ -215,9 +215,10 @@ int RunSimulate(const std::vector<std::string>& args) {
               << "internal steps   " << result.stats.internal_steps << "\n"
               << "wall time        " << std::setprecision(3) << result.wall_s << " s\n";
     for (size_t i = 0; i < result.invariant_names.size(); ++i) {
-      std::cout << std::setprecision(3) << result.invariant_names[i] << " drift"
-                << std::string(12 - std::min<size_t>(11, result.invariant_names[i].size()), ' ')
-                << "max |dI/I0| = " << result.invariant_drift[i] << "\n";
+      std::string label = result.invariant_names[i] + " drift";
+      label.resize(std::max<size_t>(label.size() + 1, 17), ' ');
+      std::cout << std::setprecision(3) << label << "max |dI/I0| = " << result.invariant_drift[i]
+                << "\n";
     }
     std::cout << "wrote            " << out_path << " and " << out_path << ".json\n";
   }
