@@ -46,6 +46,9 @@ struct SimulationSpec {
   TransitionOptions transition;
   double input = 0.0;
   std::vector<double> process_noise_var;  // empty = none, else one per state
+  // Full process-noise covariance per output step (n x n, row-major, PSD);
+  // used instead of process_noise_var when not empty.
+  std::vector<double> process_noise_cov;
   std::string measurement;                // empty = none
   std::vector<double> meas_noise_var;     // empty = none, else one per output
   uint64_t seed = 1;

@@ -11,6 +11,7 @@
 #ifndef ESTLAB_SIM_SIMULATOR_IMPL_H_
 #define ESTLAB_SIM_SIMULATOR_IMPL_H_
 
+#include <Eigen/Eigenvalues>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -60,9 +61,25 @@ SimulationResult Simulate(const SimulationSpec& spec) {
     return row;
   };
 
+  // Process noise w = L n with L L^T = Q (diagonal variances or a full PSD
+  // covariance; the symmetric square root handles semi-definite Q).
+  Mat<N, N> noise_factor = Mat<N, N>::Zero();
+  bool has_process_noise = false;
+  if (!spec.process_noise_cov.empty()) {
+    Mat<N, N> Q;
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < N; ++j) Q(i, j) = spec.process_noise_cov[i * N + j];
+    Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(0.5 * (Q + Q.transpose()));
+    noise_factor = eig.eigenvectors() *
+                   eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+                   eig.eigenvectors().transpose();
+    has_process_noise = true;
+  } else if (!spec.process_noise_var.empty()) {
+    for (int i = 0; i < N; ++i) noise_factor(i, i) = std::sqrt(spec.process_noise_var[i]);
+    has_process_noise = true;
+  }
   const bool track_invariants = Model::kInvariantNames.size() > 0 &&
-                                Model::InvariantsHold(params, spec.input) &&
-                                spec.process_noise_var.empty();
+                                Model::InvariantsHold(params, spec.input) && !has_process_noise;
   auto transition = MakeTransition<Model>(params, spec.transition);
   transition->SetInput(spec.input);
 
@@ -89,8 +106,10 @@ SimulationResult Simulate(const SimulationSpec& spec) {
       result.error = "state became non-finite at t = " + std::to_string(t1);
       break;
     }
-    if (!spec.process_noise_var.empty()) {
-      for (int i = 0; i < N; ++i) x(i) += std::sqrt(spec.process_noise_var[i]) * rng.Normal();
+    if (has_process_noise) {
+      Vec<double, N> n;
+      for (int i = 0; i < N; ++i) n(i) = rng.Normal();
+      x += noise_factor * n;
     }
     if (track_invariants) {
       const auto inv = Model::Invariants(x, params);
