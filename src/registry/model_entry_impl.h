@@ -3,9 +3,11 @@
 #ifndef ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 #define ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 
+#include "adaptive/tuner.h"
 #include "src/ode/transition_impl.h"
 #include "src/registry/model_traits.h"
 #include "src/registry/registry.h"
+#include "src/run/filter_run_impl.h"
 #include "src/sim/simulator_impl.h"
 
 namespace estlab {
@@ -36,6 +38,8 @@ ModelEntry MakeModelEntry() {
   e.has_input = Model::kHasInput;
   e.stiff = Model::kStiff;
   e.simulate = &Simulate<Model>;
+  e.tune = &TuneModel<Model>;  // instantiated in adaptive/tune_<model>.cpp
+  e.run_filter = &RunFilter<Model>;
   return e;
 }
 
