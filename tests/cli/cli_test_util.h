@@ -1,0 +1,111 @@
+// Helpers for tests that run the estlab executable: a fresh temporary working
+// directory per test, running a command line with stdout/stderr captured, and
+// reading files back.
+//
+// Usage:
+//   estlab::testing::TempDir dir;
+//   auto r = estlab::testing::RunEstlab("simulate --model pendulum --out o.csv", dir.path());
+//   EXPECT_EQ(r.exit_code, 0) << r.err;
+//   EXPECT_TRUE(dir.Exists("o.csv"));
+#ifndef ESTLAB_TESTS_CLI_CLI_TEST_UTIL_H_
+#define ESTLAB_TESTS_CLI_CLI_TEST_UTIL_H_
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#ifndef ESTLAB_BINARY
+#error "ESTLAB_BINARY must be defined (path of the estlab executable)"
+#endif
+
+namespace estlab::testing {
+
+// A new empty directory under the system temp directory, removed (with its
+// contents) on destruction.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "estlab_cli_XXXXXX").string();
+    std::vector<char> buf(tmpl.begin(), tmpl.end());
+    buf.push_back('\0');
+    if (::mkdtemp(buf.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = buf.data();
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::string& path() const { return path_; }
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+  bool Exists(const std::string& name) const { return std::filesystem::exists(File(name)); }
+
+  // Names of the regular files in the directory, sorted.
+  std::vector<std::string> Files() const {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(path_))
+      names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+ private:
+  std::string path_;
+};
+
+inline std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline std::vector<std::string> SplitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) lines.push_back(line);
+  return lines;
+}
+
+struct RunResult {
+  int exit_code = -1;  // -1 when the process did not exit normally
+  std::string out;     // stdout
+  std::string err;     // stderr
+};
+
+// Runs `ESTLAB_BINARY <args>` through /bin/sh with `cwd` as the working
+// directory; args are passed to the shell verbatim (quote them yourself).
+// stdout and stderr are captured through files outside `cwd`, so `cwd` only
+// ever contains what estlab writes.
+inline RunResult RunEstlab(const std::string& args, const std::string& cwd) {
+  static int counter = 0;
+  const std::string capture =
+      (std::filesystem::temp_directory_path() /
+       ("estlab_cli_capture_" + std::to_string(::getpid()) + "_" + std::to_string(counter++)))
+          .string();
+  const std::string cmd = "cd '" + cwd + "' && '" + std::string(ESTLAB_BINARY) + "' " + args +
+                          " >'" + capture + ".out' 2>'" + capture + ".err'";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  r.out = ReadFile(capture + ".out");
+  r.err = ReadFile(capture + ".err");
+  std::filesystem::remove(capture + ".out");
+  std::filesystem::remove(capture + ".err");
+  return r;
+}
+
+}  // namespace estlab::testing
+
+#endif  // ESTLAB_TESTS_CLI_CLI_TEST_UTIL_H_
