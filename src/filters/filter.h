@@ -39,8 +39,10 @@ const char* FilterStatusName(FilterStatus status);
 // What one measurement update produced. log_likelihood is
 // log N(innovation; 0, innovation_cov) = -1/2 (log det S + nu^T S^-1 nu + m log 2 pi);
 // nis = nu^T S^-1 nu. For a particle filter, log_likelihood is
-// log((1/N) sum_i w_i p(z | x_i)) and innovation/innovation_cov are the
-// moments of the predicted measurement particles.
+// log(sum_i w_i p(z | x_i)) with w_i the normalised weights before the update
+// (= log((1/N) sum_i p(z | x_i)) right after resampling), and
+// innovation/innovation_cov are the moments of the predicted measurement
+// particles (plus R).
 template <int M>
 struct StepResult {
   Vec<double, M> innovation = Vec<double, M>::Zero();
@@ -77,6 +79,11 @@ class Filter {
   virtual FilterStatus Predict(double t0, double t1, const StateCov& process_noise) = 0;
   // Corrects with measurement z and measurement-noise covariance R.
   virtual StepResult<kM> Update(const Measurement& z, const MeasurementCov& measurement_noise) = 0;
+
+  // The input u held over the next Predict. Filters with a Transition forward
+  // it to the transition (equivalent to transition->SetInput(u)); the
+  // LinearizedKf stores it. The default ignores it (models without input).
+  virtual void SetInput(double /*u*/) {}
 
   virtual const State& mean() const = 0;
   virtual const StateCov& cov() const = 0;

@@ -1,0 +1,75 @@
+// Jacobians of a model's continuous dynamics and of its measurement
+// functions, for the Kalman-type filters.
+//
+// Usage:
+//   Mat<4, 4> A = ContinuousJacobian<models::CartPole>(x_star, 0.0, params);
+//   Vec<double, 4> B = InputJacobian<models::CartPole>(x_star, 0.0, params);
+//   Mat<2, 4> H;
+//   Vec<double, 2> hx = MeasurementAndJacobian<models::CartPole,
+//                                              models::CartPole::XTheta>(x, params, &H);
+//
+// A = df/dx and H = dh/dx are exact (forward-mode AD with ceres::Jet).
+// WARNING: B = df/du is a central difference, because Model::Rhs takes the
+// input as a plain double (no Jet can flow through it); see InputJacobian.
+// Include only where models are instantiated (this pulls in ceres/jet.h).
+#ifndef ESTLAB_FILTERS_LINEARIZE_H_
+#define ESTLAB_FILTERS_LINEARIZE_H_
+
+#include <algorithm>
+#include <cmath>
+
+#include "src/core/types.h"
+#include "src/ode/autodiff.h"
+
+namespace estlab {
+
+// f(x, u) of the (time-invariant) model, evaluated at t = 0.
+template <class Model>
+Vec<double, Model::kStateDim> ContinuousRhs(const Vec<double, Model::kStateDim>& x, double u,
+                                            const typename Model::Params& params) {
+  return Model::Rhs(0.0, x, u, params);
+}
+
+// A = df/dx (x, u), exact by automatic differentiation of Model::Rhs.
+template <class Model>
+Mat<Model::kStateDim, Model::kStateDim> ContinuousJacobian(const Vec<double, Model::kStateDim>& x,
+                                                           double u,
+                                                           const typename Model::Params& params) {
+  constexpr int N = Model::kStateDim;
+  Mat<N, N> A;
+  ValueAndJacobian<N, N>(
+      [&](const auto& xj) {
+        using T = typename std::decay_t<decltype(xj)>::Scalar;
+        return Model::Rhs(T(0.0), xj, u, params);
+      },
+      x, &A);
+  return A;
+}
+
+// B = df/du (x, u) by the fourth-order central difference
+//   B = [f(u - 2h) - 8 f(u - h) + 8 f(u + h) - f(u + 2h)] / (12 h),
+// h = 1e-3 max(1, |u|): truncation error O(h^4 d^5f/du^5), rounding about
+// 2 eps |f| / h. For inputs that enter affinely (forces on mechanical models)
+// the truncation error is zero and only the rounding remains.
+template <class Model>
+Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>& x, double u,
+                                            const typename Model::Params& params) {
+  const double h = 1e-3 * std::max(1.0, std::abs(u));
+  auto f = [&](double v) { return ContinuousRhs<Model>(x, v, params); };
+  return (f(u - 2.0 * h) - 8.0 * f(u - h) + 8.0 * f(u + h) - f(u + 2.0 * h)) / (12.0 * h);
+}
+
+// h(x), and H = dh/dx (x) by automatic differentiation when H is not null.
+template <class Model, class Meas>
+Vec<double, Meas::kDim> MeasurementAndJacobian(const Vec<double, Model::kStateDim>& x,
+                                               const typename Model::Params& params,
+                                               Mat<Meas::kDim, Model::kStateDim>* H) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  if (H == nullptr) return Meas::Eval(x, params);
+  return ValueAndJacobian<M, N>([&](const auto& xj) { return Meas::Eval(xj, params); }, x, H);
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_FILTERS_LINEARIZE_H_

@@ -1,0 +1,290 @@
+// Bootstrap particle filter (Gordon, Salmond & Smith 1993): particles moved by
+// the process model plus Gaussian process noise, weighted by the Gaussian
+// measurement likelihood, resampled when the effective sample size drops.
+//
+// Usage:
+//   auto transition = MakeTransition<models::Pendulum>(params, transition_options);
+//   ParticleOptions options;
+//   options.num_particles = 1000;
+//   options.resample = ResampleScheme::kResidual;   // paper 002
+//   ParticleFilter<models::Pendulum, models::Pendulum::Sin> pf(transition.get(), params,
+//                                                              options);
+//   pf.Initialize(x0, P0);          // draws x_i ~ N(x0, P0), seeded by options.seed
+//   pf.Predict(t0, t1, Q);
+//   StepResult<1> r = pf.Update(z, R);
+//
+// Predict:  x_i <- Phi(x_i) + L_Q e_i,  e_i ~ N(0, I),  L_Q L_Q^T = Q
+//           (Q may be singular or zero: L_Q from an eigendecomposition then)
+// Update (w_i the normalised weights before the update):
+//   log p_i = log N(wrap(z - h(x_i)); 0, R)
+//   log_likelihood = log sum_i w_i p_i              (log-sum-exp)
+//   w_i <- w_i p_i / sum_j w_j p_j,  ESS = 1 / sum_i w_i^2
+//   resample (options.resample) when ESS < ess_threshold N; weights -> 1/N
+//   z^ = sum_i w_i h(x_i) (before the update; circular for angle outputs),
+//   innovation = wrap(z - z^), innovation_cov = sum_i w_i dh_i dh_i^T + R
+// Estimate (after Predict and Update, from the weighted particles before any
+// resampling): mean = sum_i w_i x_i, and for angle states the circular mean
+// atan2(sum_i w_i sin x_i, sum_i w_i cos x_i), put on the branch nearest the
+// previous estimate; cov = sum_i w_i d_i d_i^T, d_i = wrap(x_i - mean).
+//
+// WARNING: Initialize() restarts the generator from options.seed, so two runs
+// with the same seed and data give identical results; use a different seed
+// per Monte Carlo run. The filter does not own the transition.
+#ifndef ESTLAB_FILTERS_PARTICLE_H_
+#define ESTLAB_FILTERS_PARTICLE_H_
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "src/core/random.h"
+#include "src/filters/filter.h"
+#include "src/filters/filter_util.h"
+#include "src/ode/transition.h"
+
+namespace estlab {
+
+enum class ResampleScheme { kMultinomial, kSystematic, kStratified, kResidual };
+
+// Parses "multinomial", "systematic", "stratified", "residual"; throws InputError.
+ResampleScheme ParseResampleScheme(const std::string& name);
+const char* ResampleSchemeName(ResampleScheme scheme);
+
+struct ParticleOptions {
+  int num_particles = 1000;
+  ResampleScheme resample = ResampleScheme::kSystematic;
+  // Resample when ESS < ess_threshold * N; 1 = every step, 0 = never.
+  double ess_threshold = 0.5;
+  uint64_t seed = 1;
+
+  bool IsValid(std::string* error) const;
+};
+
+// Draws N = weights.size() ancestor indices (ascending) with
+// E[number of copies of i] = N w_i. `weights` must be non-negative and sum to
+// 1 (the last cumulative sum is taken as exactly 1). Schemes (Douc, Cappe &
+// Moulines 2005):
+//   multinomial: N independent draws (sorted uniforms by exponential spacings)
+//   systematic:  u_k = (k + U) / N, one U           copies in {floor, ceil}(N w_i)
+//   stratified:  u_k = (k + U_k) / N                 |copies - N w_i| < 2
+//   residual:    floor(N w_i) copies, the rest multinomial on the remainders
+// *indices is resized to N (no allocation when it already has that size).
+void Resample(const std::vector<double>& weights, ResampleScheme scheme, Rng& rng,
+              std::vector<int>* indices);
+
+// log(sum_i exp(v_i)), -inf for an empty or all -inf input.
+double LogSumExp(const Eigen::VectorXd& v);
+
+template <class Model, class Meas>
+class ParticleFilter final : public FilterCommon<Model, Meas> {
+ public:
+  using Base = FilterCommon<Model, Meas>;
+  using Base::kM;
+  using Base::kN;
+  using typename Base::Measurement;
+  using typename Base::MeasurementCov;
+  using typename Base::State;
+  using typename Base::StateCov;
+  using Params = typename Model::Params;
+
+  // Throws InputError for a null transition or invalid options. All particle
+  // storage is allocated here, once.
+  ParticleFilter(Transition<Model>* transition, const Params& params,
+                 const ParticleOptions& options)
+      : transition_(transition), params_(params), options_(options), rng_(options.seed) {
+    std::string error;
+    if (transition_ == nullptr) throw InputError("ParticleFilter needs a transition");
+    if (!options.IsValid(&error)) throw InputError(error);
+    const int n = options.num_particles;
+    particles_.resize(kN, n);
+    scratch_.resize(kN, n);
+    predicted_measurements_.resize(kM, n);
+    log_weights_.setConstant(n, -std::log(double(n)));
+    log_likelihoods_.resize(n);
+    weights_.assign(n, 1.0 / n);
+    indices_.resize(n);
+  }
+
+  std::string Name() const override { return "pf"; }
+  void SetInput(double u) override { transition_->SetInput(u); }
+
+  // Draws x_i = x0 + L0 e_i, L0 L0^T = P0 (P0 may be singular), uniform weights.
+  void Initialize(const State& mean, const StateCov& cov) override {
+    this->SetPrior(mean, cov);
+    rng_ = Rng(options_.seed);
+    StateCov L;
+    if (this->CheckReady() != FilterStatus::kOk || !CovarianceSqrt<kN>(cov, &L, nullptr)) return;
+    for (Eigen::Index i = 0; i < particles_.cols(); ++i)
+      particles_.col(i) = mean + L * StandardNormal();
+    SetUniformWeights();
+    ComputeMoments();
+  }
+
+  FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
+    if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
+    StateCov LQ;
+    std::string why;
+    if (!CovarianceSqrt<kN>(Q, &LQ, &why))
+      return Fail(FilterStatus::kFactorizationFailed, "process noise Q: " + why);
+    const bool noisy = !Q.isZero(0.0);
+    // x_i <- Phi(x_i) + L_Q e_i
+    try {
+      for (Eigen::Index i = 0; i < particles_.cols(); ++i) {
+        particles_.col(i) = transition_->Step(State(particles_.col(i)), t0, t1);
+        if (noisy) particles_.col(i) += LQ * StandardNormal();
+      }
+    } catch (const std::exception& e) {
+      return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
+    }
+    ComputeMoments();
+    if (!BeliefFinite(x_, P_))
+      return Fail(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
+    return FilterStatus::kOk;
+  }
+
+  StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
+    if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
+      return FailResult(ready, error_);
+    const Eigen::LLT<MeasurementCov> r_llt(R);
+    if (r_llt.info() != Eigen::Success || !R.allFinite())
+      return FailResult(FilterStatus::kFactorizationFailed,
+                        "Cholesky of the measurement noise R failed (not positive definite)");
+    // log p_i = log N(wrap(z - h(x_i)); 0, R)
+    const Eigen::Index n = particles_.cols();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
+      const Measurement nu_i =
+          WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
+      log_likelihoods_(i) = GaussianLogLikelihood(r_llt, nu_i, nullptr);
+    }
+    // Predicted-measurement moments with the prior weights:
+    // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)
+    const Measurement z_pred =
+        Mean<kM>(predicted_measurements_, Meas::kAngleOutputs, Meas::Eval(x_, params_));
+    MeasurementCov S = WeightedCrossCov<kM, kM>(predicted_measurements_, z_pred,
+                                                Meas::kAngleOutputs, predicted_measurements_,
+                                                z_pred, Meas::kAngleOutputs, weight_vector());
+    S += R;
+    Symmetrize(&S);
+    const Eigen::LLT<MeasurementCov> s_llt(S);
+    if (s_llt.info() != Eigen::Success)
+      return FailResult(FilterStatus::kFactorizationFailed,
+                        "Cholesky of the predicted-measurement covariance failed");
+    StepResult<kM> result;
+    SetInnovation(WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs), S, s_llt, &result);
+    // log_likelihood = log sum_i w_i p_i;  log w_i <- log w_i + log p_i - log_likelihood
+    log_likelihoods_ += log_weights_;
+    const double log_lik = LogSumExp(log_likelihoods_);
+    if (!std::isfinite(log_lik))
+      return FailResult(FilterStatus::kNonFinite,
+                        "all particle likelihoods underflowed (the measurement is far from "
+                        "every particle)");
+    result.log_likelihood = log_lik;
+    log_weights_ = log_likelihoods_.array() - log_lik;
+    double sum_sq = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      weights_[i] = std::exp(log_weights_(i));
+      sum_sq += weights_[i] * weights_[i];
+    }
+    ess_ = 1.0 / sum_sq;  // ESS = 1 / sum_i w_i^2
+    ComputeMoments();
+    if (!BeliefFinite(x_, P_))
+      return FailResult(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
+    result.residual = WrapResidual<kM>(z - Meas::Eval(x_, params_), Meas::kAngleOutputs);
+    resampled_ = ess_ < options_.ess_threshold * double(n);
+    if (resampled_) ResampleParticles();
+    return result;
+  }
+
+  // Effective sample size 1 / sum_i w_i^2 after the last Update, and whether
+  // it resampled.
+  double effective_sample_size() const { return ess_; }
+  bool resampled() const { return resampled_; }
+  const Eigen::Matrix<double, kN, Eigen::Dynamic>& particles() const { return particles_; }
+  const std::vector<double>& weights() const { return weights_; }
+
+ private:
+  using Base::error_;
+  using Base::Fail;
+  using Base::FailResult;
+  using Base::P_;
+  using Base::x_;
+
+  State StandardNormal() {
+    State e;
+    for (int j = 0; j < kN; ++j) e(j) = rng_.Normal();
+    return e;
+  }
+
+  Eigen::Map<const Eigen::VectorXd> weight_vector() const {
+    return Eigen::Map<const Eigen::VectorXd>(weights_.data(), Eigen::Index(weights_.size()));
+  }
+
+  void SetUniformWeights() {
+    const double n = double(particles_.cols());
+    std::fill(weights_.begin(), weights_.end(), 1.0 / n);
+    log_weights_.setConstant(-std::log(n));
+  }
+
+  // Weighted mean of the columns of `points`; angle components by the circular
+  // mean atan2(sum w sin, sum w cos), on the branch nearest `reference`.
+  template <int D, std::size_t K, class Points>
+  Vec<double, D> Mean(const Points& points, const std::array<bool, K>& angle_flags,
+                      const Vec<double, D>& reference) const {
+    Vec<double, D> m = Vec<double, D>::Zero(), s = Vec<double, D>::Zero(),
+                   c = Vec<double, D>::Zero();
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      const double w = weights_[i];
+      for (int j = 0; j < D; ++j) {
+        if (angle_flags[j]) {
+          s(j) += w * std::sin(points(j, i));
+          c(j) += w * std::cos(points(j, i));
+        } else {
+          m(j) += w * points(j, i);
+        }
+      }
+    }
+    for (int j = 0; j < D; ++j)
+      if (angle_flags[j]) m(j) = reference(j) + WrapAngle(std::atan2(s(j), c(j)) - reference(j));
+    return m;
+  }
+
+  void ComputeMoments() {
+    const State reference = x_;
+    x_ = Mean<kN>(particles_, Model::kAngleStates, reference);
+    P_ = WeightedCrossCov<kN, kN>(particles_, x_, Model::kAngleStates, particles_, x_,
+                                  Model::kAngleStates, weight_vector());
+    Symmetrize(&P_);
+  }
+
+  void ResampleParticles() {
+    Resample(weights_, options_.resample, rng_, &indices_);
+    for (Eigen::Index i = 0; i < particles_.cols(); ++i)
+      scratch_.col(i) = particles_.col(indices_[i]);
+    particles_.swap(scratch_);
+    SetUniformWeights();
+  }
+
+  Transition<Model>* transition_;
+  Params params_;
+  ParticleOptions options_;
+  Rng rng_;
+  Eigen::Matrix<double, kN, Eigen::Dynamic> particles_;
+  Eigen::Matrix<double, kN, Eigen::Dynamic> scratch_;
+  Eigen::Matrix<double, kM, Eigen::Dynamic> predicted_measurements_;
+  Eigen::VectorXd log_weights_;
+  Eigen::VectorXd log_likelihoods_;
+  std::vector<double> weights_;
+  std::vector<int> indices_;
+  double ess_ = 0.0;
+  bool resampled_ = false;
+};
+
+}  // namespace estlab
+
+#endif  // ESTLAB_FILTERS_PARTICLE_H_
