@@ -11,6 +11,9 @@ namespace estlab::cli {
 int RunSimulate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);
 int RunFilterCommand(const std::vector<std::string>& args);
+int RunStudyCommand(const std::vector<std::string>& args);
+int RunMerge(const std::vector<std::string>& args);
+int RunFigures(const std::vector<std::string>& args);
 
 
 }  // namespace estlab::cli

@@ -1,0 +1,246 @@
+// estlab study | merge | figures: Monte Carlo studies from a config file.
+#include <signal.h>
+
+#include <atomic>
+#include <boost/program_options.hpp>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+
+#include "src/cli/args.h"
+#include "src/cli/commands.h"
+#include "src/core/types.h"
+#include "src/io/json.h"
+#include "studies/study_config.h"
+#include "studies/study_figures.h"
+#include "studies/study_results.h"
+#include "studies/study_runner.h"
+
+namespace po = boost::program_options;
+
+namespace estlab::cli {
+
+namespace {
+
+constexpr const char* kStudyHelp = R"(
+Runs every scenario of CONFIG (a studies/*.ini file, format in docs/studies.md)
+N times: each run simulates the truth once and runs every filter x noise
+setting on the same measurements.
+
+Examples:
+  estlab study studies/paper002_pendulum_mc.ini --out results/paper002 --jobs 2
+  estlab study studies/paper000_noise_grid.ini --out results/p000 --runs 10
+  # Three machines, then join:
+  estlab study S.ini --out r1 --shard 1/3   (and 2/3, 3/3 into r2, r3)
+  estlab merge results/all r1 r2 r3
+  estlab figures results/paper002
+
+Output folder: runs.csv (a row per scenario, run, filter and noise setting),
+summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
+report.md, manifest.json. runs.csv and summary.csv do not depend on --jobs or
+--shard. Ctrl-C (or SIGTERM) stops taking new runs, writes the finished ones
+and exits 130 (143); the same command again resumes.
+Exit status: 0 done, 1 runs failed to write, 2 bad config or options.
+)";
+
+std::atomic<int> g_stop_signal{0};
+
+extern "C" void OnStopSignal(int sig) {
+  g_stop_signal = sig;
+  ::signal(sig, SIG_DFL);  // a second signal ends the process at once
+}
+
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = OnStopSignal;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(SIGINT, &sa, &old_int_);
+    ::sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopSignals() {
+    ::sigaction(SIGINT, &old_int_, nullptr);
+    ::sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {
+  }, old_term_{};
+};
+
+void ParseShard(const std::string& text, int* k, int* n) {
+  const auto slash = text.find('/');
+  try {
+    if (slash == std::string::npos) throw InputError("");
+    const double a = ParseNumber(text.substr(0, slash), "--shard");
+    const double b = ParseNumber(text.substr(slash + 1), "--shard");
+    if (a != std::floor(a) || b != std::floor(b) || b < 1 || a < 1 || a > b || b > 100000)
+      throw InputError("");
+    *k = int(a);
+    *n = int(b);
+  } catch (const InputError&) {
+    throw InputError("--shard: expected k/N with 1 <= k <= N, got '" + text + "'");
+  }
+}
+
+// A short table of summary.csv: mean RMSE per state, NEES and NIS per group.
+void PrintSummaryTable(const std::string& dir) {
+  const CsvText s = ReadCsvText(dir + "/summary.csv");
+  const int metric = s.Column("metric"), mean = s.Column("mean"), n = s.Column("n");
+  const int runs = s.Column("runs"), lo = s.Column("ci95_lo"), hi = s.Column("ci95_hi");
+  std::string group;
+  for (const auto& r : s.rows) {
+    const std::string g = r[0] + "  " + r[1] + "/" + r[2];
+    if (g != group) {
+      std::cout << (group.empty() ? "" : "\n") << g << "  (" << r[n] << "/" << r[runs]
+                << " runs ok)\n";
+      group = g;
+    }
+    const std::string& m = r[metric];
+    if (m.rfind("rmse_", 0) == 0 || m == "mean_nees" || m == "mean_nis")
+      std::cout << "  " << std::left << std::setw(16) << m << std::right << std::setw(12)
+                << (r[mean].empty() ? "-" : r[mean].substr(0, 10)) << "   95% CI ["
+                << r[lo].substr(0, 9) << ", " << r[hi].substr(0, 9) << "]\n";
+  }
+}
+
+std::string SummaryJson(const std::string& dir, const StudyConfig& config,
+                        const StudyRunSummary& sum) {
+  JsonWriter j;
+  j.BeginObject().Key("study").Value(config.study.name).Key("out").Value(dir);
+  j.Key("status").Value(sum.interrupted ? "interrupted" : "complete");
+  j.Key("total_runs").Value(sum.total_runs).Key("finished_runs").Value(sum.finished_runs);
+  j.Key("resumed_runs").Value(sum.resumed_runs);
+  j.Key("failed_filter_runs").Value(sum.failed_filter_runs).Key("wall_s").Value(sum.wall_s);
+  j.Key("summary").BeginArray();
+  if (!sum.interrupted) {
+    const CsvText s = ReadCsvText(dir + "/summary.csv");
+    for (const auto& r : s.rows) {
+      j.BeginObject();
+      for (size_t c = 0; c < s.columns.size(); ++c) {
+        if (c < 4) {
+          j.Key(s.columns[c]).Value(r[c]);
+        } else if (r[c].empty()) {
+          j.Key(s.columns[c]).Null();
+        } else {
+          j.Key(s.columns[c]).Value(std::strtod(r[c].c_str(), nullptr));
+        }
+      }
+      j.EndObject();
+    }
+  }
+  j.EndArray().EndObject();
+  return j.str();
+}
+
+}  // namespace
+
+int RunStudyCommand(const std::vector<std::string>& args) {
+  po::options_description desc("estlab study CONFIG --out DIR: run a Monte Carlo study");
+  desc.add_options()("help,h", "this text")("config", po::value<std::string>(),
+                                            "study file (studies/*.ini)")(
+      "out", po::value<std::string>(),
+      "results folder (created; an existing one of the same study is resumed)")(
+      "runs", po::value<int>(), "Monte Carlo runs per scenario (overrides [study] runs)")(
+      "jobs", po::value<int>(), "worker threads (overrides [study] jobs)")(
+      "shard", po::value<std::string>(), "k/N: only runs i with i % N == k-1")(
+      "quiet", "no progress output")("json", "print a JSON summary on stdout");
+  po::positional_options_description pos;
+  pos.add("config", 1);
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).positional(pos).run(), vm);
+  po::notify(vm);
+  if (vm.count("help")) {
+    std::cout << desc << kStudyHelp;
+    return 0;
+  }
+  if (!vm.count("config"))
+    throw InputError("a study file is required: estlab study CONFIG --out DIR");
+  if (!vm.count("out")) throw InputError("--out is required");
+  StudyRunOptions options;
+  options.out_dir = vm["out"].as<std::string>();
+  if (vm.count("runs")) {
+    options.runs = vm["runs"].as<int>();
+    if (options.runs < 1) throw InputError("--runs must be >= 1");
+  }
+  if (vm.count("jobs")) {
+    options.jobs = vm["jobs"].as<int>();
+    if (options.jobs < 1) throw InputError("--jobs must be >= 1");
+  }
+  if (vm.count("shard")) ParseShard(vm["shard"].as<std::string>(), &options.shard, &options.shards);
+  options.progress = !vm.count("quiet");
+  const bool json = vm.count("json") > 0;
+
+  const StudyConfig config = LoadStudyConfig(vm["config"].as<std::string>());
+  StopSignals signals;
+  options.stop = &g_stop_signal;
+  const StudyRunSummary sum = RunStudy(config, options);
+  const int sig = g_stop_signal.load();
+
+  if (json) std::cout << SummaryJson(options.out_dir, config, sum) << "\n";
+  if (sum.interrupted) {
+    std::cerr << "estlab: " << (sig == SIGTERM ? "terminated" : "interrupted") << ": "
+              << sum.finished_runs << " of " << sum.total_runs << " runs are finished in "
+              << options.out_dir << "/runs.csv; run the same command again to resume\n";
+    return sig == SIGTERM ? 143 : 130;
+  }
+  if (!json) {
+    PrintSummaryTable(options.out_dir);
+    std::cout << "\n" << sum.finished_runs << " runs";
+    if (sum.resumed_runs) std::cout << " (" << sum.resumed_runs << " from before)";
+    std::cout << " in " << std::setprecision(3) << sum.wall_s << " s";
+    if (sum.failed_filter_runs)
+      std::cout << "; " << sum.failed_filter_runs << " filter runs failed (status in runs.csv)";
+    std::cout << "\nwrote " << options.out_dir << "/{runs,summary,time_metrics}.csv, report.md, "
+              << "manifest.json\n";
+  }
+  return 0;
+}
+
+int RunMerge(const std::vector<std::string>& args) {
+  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+    std::cout << "estlab merge OUT SHARD_DIR...: join the folders of 'estlab study --shard k/N'\n"
+                 "into OUT (new or empty). The result equals one unsharded run.\n";
+    return args.empty() ? 2 : 0;
+  }
+  if (args.size() < 2) throw InputError("merge: give OUT and at least one shard folder");
+  MergeStudies(args[0], std::vector<std::string>(args.begin() + 1, args.end()));
+  std::cout << "merged " << args.size() - 1 << " shard folder(s) into " << args[0] << "\n";
+  return 0;
+}
+
+int RunFigures(const std::vector<std::string>& args) {
+  po::options_description desc("estlab figures DIR: draw a finished study's figures with gnuplot");
+  desc.add_options()("help,h", "this text")("dir", po::value<std::string>(), "results folder")(
+      "no-render", "write the .dat and .gp files only")(
+      "gnuplot", po::value<std::string>()->default_value("gnuplot"), "gnuplot program");
+  po::positional_options_description pos;
+  pos.add("dir", 1);
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).positional(pos).run(), vm);
+  po::notify(vm);
+  if (vm.count("help")) {
+    std::cout << desc
+              << "\nWrites DIR/figures/NAME.{dat,gp,png,svg}: estimate vs truth with "
+                 "+-2 sd (a kept run),\nRMSE over time, NEES/NIS with 95 % bounds, mean "
+                 "RMSE per filter with 95 % CI.\n";
+    return 0;
+  }
+  if (!vm.count("dir")) throw InputError("a results folder is required: estlab figures DIR");
+  FiguresOptions options;
+  options.render = !vm.count("no-render");
+  options.gnuplot = vm["gnuplot"].as<std::string>();
+  const FiguresSummary f = DrawStudyFigures(vm["dir"].as<std::string>(), options);
+  std::cout << f.scripts.size() << " figures in " << f.folder;
+  if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";
+  std::cout << "\n";
+  if (!f.message.empty()) {
+    std::cerr << "estlab: error: " << f.message << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace estlab::cli

@@ -1,0 +1,193 @@
+// Monte Carlo study configurations: a `studies/*.ini` file read with
+// Boost.Program_options' config-file parser (unknown keys are errors), checked
+// completely before any run starts. Errors are InputError("FILE:LINE: ...")
+// naming the section and key.
+//
+// Usage:
+//   StudyConfig config = LoadStudyConfig("studies/paper002_pendulum_mc.ini");
+//   for (const ScenarioConfig& s : config.scenarios)
+//     for (const Combo& c : s.combos) use(c.spec);   // one FilterSpec per filter x noise
+//
+// File format (full reference with examples: docs/studies.md):
+//
+//   # comments start with '#'
+//   [study]
+//   name = paper002_pendulum_mc      # required; [A-Za-z0-9_-]
+//   description = ...                # optional free text
+//   seed = 2002                      # study seed (default 1)
+//   runs = 100                       # Monte Carlo runs per scenario (default 10)
+//   jobs = 2                         # worker threads (default 1; --jobs overrides)
+//   keep-runs = 0,1                  # runs whose time series are written (default 0)
+//   step-metrics-every = 2           # per-step errors kept every k steps (default:
+//                                    # at most 200 points per run)
+//
+//   [scenario.NAME]                  # one or more; NAME = [A-Za-z0-9_-]+
+//   model = pendulum                 # see `estlab list`
+//   params = g=9.8,L=1               # parameter overrides (default: model defaults)
+//   x0 = theta=0.7853981633974483    # truth initial state (unnamed states 0)
+//   truth-x0 = fixed                 # fixed | sample (x0 + N(0, P0) per run)
+//   dt = 0.0125                      # sampling interval
+//   steps = 400                      # measurements per run (t = dt .. steps dt)
+//   truth-integrator = cvodes        # cvodes (default) | rk4 | euler | semi-implicit-euler
+//   truth-rtol = 1e-10               # CVODES tolerances (defaults 1e-10, 1e-12),
+//   truth-atol = 1e-12               #   truth-method = bdf | adams | default,
+//   truth-substeps = 1               #   fixed-step substeps per dt
+//   process-noise = white-accel 1    # none (default) | diag v1,v2,.. | white-accel qc
+//                                    #   | matrix a,b;c,d  (per-step covariance)
+//   measurement = sin                # measurement name of the model (required)
+//   meas-noise-var = 0.09            # one variance per output (default 0)
+//   measure-at-t0 = false            # true: also a measurement at t = 0
+//   prior-x0 = theta=0.785398        # filter prior mean (default: x0)
+//   prior-p0-diag = 0.1,0.1          # or prior-p0 = a,b;c,d (default I)
+//   input = 0                        # constant input (models with an input)
+//
+//   Any scenario value may list alternatives separated by '|', each with an
+//   optional label:  x0 = pi4: theta=0.785398 | pi2: theta=1.570796
+//   The scenario then expands to the product of all alternatives, named
+//   NAME.label1.label2... (labels default to the value when it is a plain
+//   word or number, else KEYi).
+//
+//   [filter.NAME]
+//   kind = ukf                       # kf | ekf | iekf | ukf | ckf | ghkf | pf
+//   integrator = euler               # process model, and every other option of
+//   alpha = 1e-3                     # `estlab filter` that is not about the data
+//   particles = 1000                 # or the model: substeps, method, rtol, atol,
+//   resample = residual              # max-steps, linearize-at, iterations, beta,
+//                                    # kappa, gh-order, sigma-update, jitter, adapt,
+//                                    # adapt-what, forgetting, window, ess-threshold
+//   scenarios = a,b                  # optional: only these scenario sections
+//
+//   [noise.NAME]                     # Q/R settings, each filter runs with each
+//   q = oracle                       # oracle = the truth's noise;
+//   r = oracle                       # tuned = the likelihood tuner (when built)
+//   # or, as in `estlab filter`: q-diag | q (matrix a,b;c,d) | q-white-accel,
+//   #   r-diag | r (matrix); exactly one Q and one R key.
+//   scenarios = a,b                  # optional
+//
+//   [report]                         # optional: the paper's numbers and claims
+//   paper = 002
+//   title = EKF, UKF and PF on a pendulum with sin measurement
+//   reference = SCEN/FILTER/NOISE METRIC mean=0.1721 var=0.1722 | Table 1
+//   claim = rmse_theta: pf < ekf | PF has the lowest error
+//   note = free text copied into report.md (repeatable)
+//
+// WARNING: the seed of run i of scenario s is DeriveSeed({seed, s, i}) with s
+// the index of the (expanded) scenario in file order: reordering scenario
+// sections changes every seed. Filters and noise settings get their particle
+// filter seed from the run seed and their names, so adding a filter does not
+// change the others' results.
+#ifndef ESTLAB_STUDIES_STUDY_CONFIG_H_
+#define ESTLAB_STUDIES_STUDY_CONFIG_H_
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "src/registry/registry.h"
+#include "src/run/filter_spec.h"
+
+namespace estlab {
+
+struct StudySettings {
+  std::string name;
+  std::string description;
+  uint64_t seed = 1;
+  int runs = 10;
+  int jobs = 1;
+  std::vector<int> keep_runs = {0};
+  int step_metrics_every = 0;  // 0 = automatic (<= 200 points per run)
+};
+
+// One filter x noise combination of a scenario, with its spec ready to run
+// (seed and prior time are set per run).
+struct Combo {
+  int filter = 0;  // index into StudyConfig::filters
+  int noise = 0;   // index into StudyConfig::noises
+  FilterSpec spec;
+};
+
+struct ScenarioConfig {
+  std::string name;                                          // expanded name, e.g. "pend.pi4.q1e-4"
+  std::string section;                                       // "scenario.pend"
+  std::vector<std::pair<std::string, std::string>> choices;  // varied key -> label
+  const ModelEntry* model = nullptr;
+  SimulationSpec truth;  // seed and (with truth-x0 = sample) x0 set per run
+  bool sample_x0 = false;
+  int steps = 0;
+  bool measure_at_t0 = false;
+  std::string truth_description;  // e.g. "cvodes rtol 1e-10, white-accel qc 1"
+  // The truth's noise per step, row-major: the oracle Q and R.
+  std::vector<double> oracle_q;
+  bool oracle_q_white_accel = false;
+  double oracle_qc = 0.0;
+  std::vector<double> oracle_r;
+  std::vector<double> prior_x0, prior_p0;
+  std::vector<Combo> combos;  // filter-major, in file order
+};
+
+struct FilterConfig {
+  std::string name;
+  std::string kind;
+  std::string description;             // "ukf alpha=1e-3 integrator=euler"
+  std::vector<std::string> scenarios;  // empty = all
+};
+
+struct NoiseConfig {
+  std::string name;
+  std::string description;  // "Q oracle, R diag 0.09"
+  std::vector<std::string> scenarios;
+};
+
+// A number from the paper, to be printed beside ours in report.md.
+struct ReferenceValue {
+  std::string scenario, filter, noise;                // '*' matches any
+  std::string metric;                                 // a runs.csv column, e.g. rmse_theta
+  std::vector<std::pair<std::string, double>> stats;  // mean, var, std, ...
+  std::string source;
+};
+
+// "METRIC: A OP B": compares the mean of METRIC of filter A and filter B
+// (FILTER or FILTER/NOISE) in every scenario (and noise setting) where both ran.
+struct Claim {
+  std::string metric;
+  std::string a, b;
+  std::string op;  // < <= > >=
+  std::string text;
+};
+
+struct StudyConfig {
+  std::string path;
+  std::string text;  // the file as read
+  StudySettings study;
+  std::vector<ScenarioConfig> scenarios;
+  std::vector<FilterConfig> filters;
+  std::vector<NoiseConfig> noises;
+  std::string paper, title;
+  std::vector<std::string> notes;
+  std::vector<ReferenceValue> references;
+  std::vector<Claim> claims;
+  // Union of the scenarios' state names, in order of first appearance: the
+  // rmse_/mae_ columns of runs.csv.
+  std::vector<std::string> state_columns;
+};
+
+// Reads and validates `path` completely (every FilterSpec is built and every
+// filter is tried on a two-step dry run). Throws InputError "FILE:LINE: ...".
+StudyConfig LoadStudyConfig(const std::string& path);
+// Same from text (`path` is used in messages).
+StudyConfig ParseStudyConfig(const std::string& text, const std::string& path);
+
+// The truth's white-noise-acceleration covariance over one step dt,
+// qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] on the state pairs (0,1), (2,3), ...
+// (n x n, row-major). Every registered model orders its states as
+// (position, rate) pairs; study_config_test checks this against each model's
+// own pairs (the filters' q-white-accel).
+std::vector<double> WhiteAccelCovariance(int n, double qc, double dt);
+
+// 64-bit FNV-1a of the text: identifies a configuration in results folders.
+uint64_t ConfigHash(const std::string& text);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_STUDIES_STUDY_CONFIG_H_

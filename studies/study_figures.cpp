@@ -1,0 +1,300 @@
+#include "studies/study_figures.h"
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "src/core/types.h"
+#include "src/io/csv_reader.h"
+#include "src/io/output_file.h"
+#include "studies/study_config.h"
+#include "studies/study_results.h"
+
+namespace fs = std::filesystem;
+
+namespace estlab {
+
+namespace {
+
+constexpr const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
+                                   "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+
+std::string Color(size_t i) { return kColors[i % (sizeof kColors / sizeof kColors[0])]; }
+
+// Runs a shell command, returns its exit status and output.
+int RunCommand(const std::string& command, std::string* output) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return -1;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) *output += buf;
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string Quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string DatValue(const std::string& s) { return s.empty() ? "NaN" : s; }
+
+class Figure {
+ public:
+  Figure(std::string folder, std::string name)
+      : folder_(std::move(folder)), name_(std::move(name)) {}
+  std::ostringstream& dat() { return dat_; }
+  std::ostringstream& body() { return body_; }
+  std::string dat_name() const { return name_ + ".dat"; }
+
+  // Writes NAME.dat and NAME.gp (drawing both NAME.png and NAME.svg).
+  std::string Write(const std::string& png_terminal, int width, int height) const {
+    WriteTextFile(folder_ + "/" + name_ + ".dat", dat_.str());
+    std::ostringstream gp;
+    gp << "# estlab figure; redraw with: gnuplot " << name_ << ".gp (in this folder)\n"
+       << "# data: " << name_ << ".dat\n"
+       << "do for [fmt in \"png svg\"] {\n"
+       << "  if (fmt eq \"png\") {\n"
+       << "    set terminal " << png_terminal << " noenhanced size " << width << "," << height
+       << "\n  } else {\n"
+       << "    set terminal svg noenhanced size " << width << "," << height << " dynamic\n"
+       << "  }\n"
+       << "  set output '" << name_ << ".'.fmt\n"
+       << "  reset\n"
+       << "  set grid\n"
+       << "  set key outside right top\n"
+       << body_.str() << "  set output\n}\n";
+    WriteTextFile(folder_ + "/" + name_ + ".gp", gp.str());
+    return folder_ + "/" + name_ + ".gp";
+  }
+
+ private:
+  std::string folder_, name_;
+  std::ostringstream dat_, body_;
+};
+
+struct ComboName {
+  std::string filter, noise;
+  std::string label() const { return filter + "/" + noise; }
+};
+
+std::vector<ComboName> Combos(const StudyConfig& c, const ScenarioConfig& sc) {
+  std::vector<ComboName> out;
+  for (const Combo& cb : sc.combos)
+    out.push_back({c.filters[cb.filter].name, c.noises[cb.noise].name});
+  return out;
+}
+
+void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, const std::string& csv,
+                    const std::string& folder, const std::string& term,
+                    std::vector<std::string>* scripts) {
+  const CsvTable ts = ReadCsv(csv);
+  const auto& states = sc.model->states;
+  Figure fig(folder,
+             sc.name + "_estimate_run" + std::to_string(run) + "_" + cn.filter + "_" + cn.noise);
+  fig.dat() << "# " << sc.name << " run " << run << ", " << cn.label() << ": t";
+  for (const auto& s : states)
+    fig.dat() << " " << s << "_true " << s << "_est " << s << "_lo2sd " << s << "_hi2sd";
+  fig.dat() << "\n";
+  for (const auto& row : ts.rows) {
+    fig.dat() << FormatDouble(row[0]);
+    for (const auto& s : states)
+      for (const char* suffix : {"_true", "_est", "_lo2sd", "_hi2sd"}) {
+        const double v = row[ts.ColumnIndex(s + suffix)];
+        fig.dat() << " " << (std::isfinite(v) ? FormatDouble(v) : "NaN");
+      }
+    fig.dat() << "\n";
+  }
+  auto& b = fig.body();
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() + " estimate vs truth")
+    << "\n";
+  for (size_t i = 0; i < states.size(); ++i) {
+    const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
+    b << "  set ylabel " << Quote(states[i]) << "\n"
+      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
+      << Quote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
+      << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd', \\\n"
+      << "       '' using 1:" << c0 << " with lines lw 2 lc rgb 'black' title 'truth', \\\n"
+      << "       '' using 1:" << c0 + 1 << " with lines lw 1.5 lc rgb '#1f77b4' title 'estimate'\n";
+  }
+  b << "  unset multiplot\n";
+  scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
+}
+
+void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos, const CsvText& tm,
+                 const std::string& folder, const std::string& term,
+                 std::vector<std::string>* scripts) {
+  const auto& states = sc.model->states;
+  Figure rmse(folder, sc.name + "_rmse_time");
+  Figure cons(folder, sc.name + "_nees_nis");
+  const int tc = tm.Column("t");
+  std::vector<int> rc;
+  for (const auto& s : states) rc.push_back(tm.Column("rmse_" + s));
+  const char* cons_cols[] = {"mean_nees", "nees_lo95", "nees_hi95",
+                             "mean_nis",  "nis_lo95",  "nis_hi95"};
+  std::vector<size_t> blocks;  // combos that have data
+  for (size_t k = 0; k < combos.size(); ++k) {
+    bool any = false;
+    for (const auto& r : tm.rows) {
+      if (r[0] != sc.name || r[1] != combos[k].filter || r[2] != combos[k].noise) continue;
+      if (!any) {
+        rmse.dat() << "# " << combos[k].label() << ": t";
+        for (const auto& s : states) rmse.dat() << " rmse_" << s;
+        rmse.dat() << "\n";
+        cons.dat() << "# " << combos[k].label()
+                   << ": t mean_nees nees_lo95 nees_hi95 mean_nis nis_lo95 nis_hi95\n";
+      }
+      any = true;
+      rmse.dat() << r[tc];
+      for (int c : rc) rmse.dat() << " " << DatValue(r[c]);
+      rmse.dat() << "\n";
+      cons.dat() << r[tc];
+      for (const char* c : cons_cols) cons.dat() << " " << DatValue(r[tm.Column(c)]);
+      cons.dat() << "\n";
+    }
+    if (any) {
+      rmse.dat() << "\n\n";
+      cons.dat() << "\n\n";
+      blocks.push_back(k);
+    }
+  }
+  if (blocks.empty()) return;
+  auto& b = rmse.body();
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name + ": RMSE over time across runs") << "\n";
+  for (size_t i = 0; i < states.size(); ++i) {
+    b << "  set ylabel " << Quote("RMSE " + states[i]) << "\n"
+      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      b << (j ? ", \\\n       " : "") << Quote(rmse.dat_name()) << " index " << j
+        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    b << "\n";
+  }
+  b << "  unset multiplot\n";
+  scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
+
+  auto& c = cons.body();
+  c << "  set multiplot layout 2,1 title "
+    << Quote(sc.name + ": mean NEES and NIS across runs, 95 % bounds dashed") << "\n"
+    << "  set logscale y\n";
+  for (int panel = 0; panel < 2; ++panel) {
+    const int col = panel == 0 ? 2 : 5;
+    c << "  set ylabel " << Quote(panel == 0 ? "NEES" : "NIS") << "\n"
+      << (panel == 1 ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      c << (j ? ", \\\n       " : "") << Quote(cons.dat_name()) << " index " << j
+        << " using 1:" << col << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    c << ", \\\n       '' index 0 using 1:" << col + 1
+      << " with lines dt 2 lc rgb 'gray30' title '95 % bounds', \\\n       '' index 0 using 1:"
+      << col + 2 << " with lines dt 2 lc rgb 'gray30' notitle\n";
+  }
+  c << "  unset multiplot\n";
+  scripts->push_back(cons.Write(term, 900, 700));
+}
+
+void MeansFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
+                 const CsvText& summary, const std::string& folder, const std::string& term,
+                 std::vector<std::string>* scripts) {
+  const auto& states = sc.model->states;
+  Figure fig(folder, sc.name + "_rmse_means");
+  const int mc = summary.Column("metric"), mean = summary.Column("mean");
+  const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
+  for (const auto& s : states) {
+    fig.dat() << "# rmse_" << s << ": index label mean ci95_lo ci95_hi\n";
+    for (size_t k = 0; k < combos.size(); ++k)
+      for (const auto& r : summary.rows)
+        if (r[0] == sc.name && r[1] == combos[k].filter && r[2] == combos[k].noise &&
+            r[mc] == "rmse_" + s)
+          fig.dat() << k << " \"" << combos[k].label() << "\" " << DatValue(r[mean]) << " "
+                    << DatValue(r[lo]) << " " << DatValue(r[hi]) << "\n";
+    fig.dat() << "\n\n";
+  }
+  auto& b = fig.body();
+  b << "  set multiplot layout 1," << states.size() << " title "
+    << Quote(sc.name + ": mean RMSE over runs with 95 % CI of the mean") << "\n"
+    << "  set xrange [-0.5:" << double(combos.size()) - 0.5 << "]\n"
+    << "  set xtics rotate by -30\n  unset key\n";
+  for (size_t i = 0; i < states.size(); ++i)
+    b << "  set ylabel " << Quote("mean RMSE " + states[i]) << "\n  plot " << Quote(fig.dat_name())
+      << " index " << i << " using 1:3:4:5:xticlabels(2) with yerrorbars pt 7 ps 1.2 lc rgb '"
+      << Color(0) << "'\n";
+  b << "  unset multiplot\n";
+  scripts->push_back(fig.Write(term, 420 * int(states.size()) + 100, 450));
+}
+
+}  // namespace
+
+FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& options) {
+  StudyState state;
+  if (!ReadStudyState(dir, &state))
+    throw InputError("'" + dir + "' is not a study results folder (no study.state)");
+  if (state.status != "complete")
+    throw InputError("the study in '" + dir + "' is " + state.status +
+                     "; finish it first (run its estlab study command again)");
+  const StudyConfig config = LoadStudyConfig(dir + "/config.ini");
+  const CsvText summary = ReadCsvText(dir + "/summary.csv");
+  const CsvText tm = ReadCsvText(dir + "/time_metrics.csv");
+
+  FiguresSummary out;
+  out.folder = dir + "/figures";
+  fs::create_directories(out.folder);
+  std::string term = "pngcairo";
+  if (options.render) {
+    std::string terminals;
+    if (RunCommand(options.gnuplot + " -e 'set terminal'", &terminals) != 0) {
+      out.message = "gnuplot ('" + options.gnuplot + "') did not run; the scripts are written";
+    } else if (terminals.find("pngcairo") == std::string::npos) {
+      term = "png";
+    }
+  }
+  out.terminal = term;
+
+  int estimate_figures = 0;
+  for (const ScenarioConfig& sc : config.scenarios) {
+    const auto combos = Combos(config, sc);
+    for (int run : config.study.keep_runs) {
+      bool drawn = false;
+      for (const auto& cn : combos) {
+        const std::string csv = dir + "/timeseries/" + sc.name + "/run" + std::to_string(run) +
+                                "_" + cn.filter + "_" + cn.noise + ".csv";
+        if (!fs::exists(csv) || estimate_figures >= options.max_estimate_figures) continue;
+        EstimateFigure(sc, run, cn, csv, out.folder, term, &out.scripts);
+        ++estimate_figures;
+        drawn = true;
+      }
+      if (drawn) break;  // the first kept run that exists
+    }
+    TimeFigures(sc, combos, tm, out.folder, term, &out.scripts);
+    MeansFigure(sc, combos, summary, out.folder, term, &out.scripts);
+  }
+
+  if (options.render && out.message.empty()) {
+    for (const auto& script : out.scripts) {
+      std::string log;
+      const std::string name = fs::path(script).filename().string();
+      const int status = RunCommand(
+          "cd " + ShellQuote(out.folder) + " && " + options.gnuplot + " " + ShellQuote(name), &log);
+      if (status != 0) {
+        out.message = "gnuplot failed on " + script + ": " + log;
+        return out;
+      }
+    }
+    out.rendered = true;
+  }
+  return out;
+}
+
+}  // namespace estlab

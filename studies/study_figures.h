@@ -1,0 +1,41 @@
+// Figures of a finished study, drawn with gnuplot. For each figure the
+// folder DIR/figures gets NAME.dat (the numbers, whitespace-separated, one
+// block per filter x noise), NAME.gp (the script: `cd DIR/figures && gnuplot
+// NAME.gp` redraws it) and the rendered NAME.png and NAME.svg.
+//
+// Per scenario:
+//   SCEN_estimate_runR_FILTER_NOISE  estimate vs truth with the +-2 sd band (kept run R)
+//   SCEN_rmse_time                   RMSE over time across the runs, per state
+//   SCEN_nees_nis                    mean NEES and NIS over time with 95 % bounds
+//   SCEN_rmse_means                  mean RMSE per filter x noise with 95 % CI of the mean
+//
+// Usage:
+//   FiguresSummary f = DrawStudyFigures("results/paper002", FiguresOptions{});
+#ifndef ESTLAB_STUDIES_STUDY_FIGURES_H_
+#define ESTLAB_STUDIES_STUDY_FIGURES_H_
+
+#include <string>
+#include <vector>
+
+namespace estlab {
+
+struct FiguresOptions {
+  bool render = true;  // false: write .dat and .gp only
+  std::string gnuplot = "gnuplot";
+  int max_estimate_figures = 64;  // estimate-vs-truth figures (first kept run only)
+};
+
+struct FiguresSummary {
+  std::string folder;
+  std::vector<std::string> scripts;  // NAME.gp paths
+  std::string terminal;              // pngcairo or png ("" when not rendered)
+  bool rendered = false;
+  std::string message;  // why not rendered
+};
+
+// Throws InputError when DIR is not a finished study folder.
+FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& options);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_STUDIES_STUDY_FIGURES_H_

@@ -1,0 +1,39 @@
+// report.md of a study: per scenario the accuracy and consistency tables, the
+// paper's numbers beside ours, and a plain sentence on each claim.
+//
+// Intervals: "mean ± sd" gives the spread over runs; "[lo, hi]" is the 95 %
+// confidence interval of the mean, mean ± 1.96 sd / sqrt(n) (summary.csv also
+// has the 2.5 / 97.5 percentiles of the runs). A claim "METRIC: A < B" is
+// judged on the means; it is called significant when the 95 % interval of the
+// paired per-run difference A - B excludes zero (both filters saw the same
+// measurements in each run, so the pairing removes the shared noise).
+#ifndef ESTLAB_STUDIES_STUDY_REPORT_H_
+#define ESTLAB_STUDIES_STUDY_REPORT_H_
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "studies/study_config.h"
+#include "studies/study_results.h"
+
+namespace estlab {
+
+struct GroupValues {
+  long runs = 0;                                      // rows in runs.csv
+  long ok = 0;                                        // rows with status ok
+  std::vector<long> run_index;                        // of the ok rows, aligned with `values`
+  std::map<std::string, std::vector<double>> values;  // metric -> per ok run
+  std::vector<double> us_per_step;                    // every run (timing.csv)
+};
+
+struct StudyTables {
+  std::map<std::string, GroupValues> groups;  // "scenario/filter/noise"
+};
+
+std::string StudyReportMarkdown(const StudyConfig& config, const StudyTables& tables,
+                                const StudyState& state);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_STUDIES_STUDY_REPORT_H_

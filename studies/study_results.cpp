@@ -1,0 +1,556 @@
+#include "studies/study_results.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+#include "src/core/types.h"
+#include "src/io/output_file.h"
+#include "studies/study_report.h"
+#include "studies/study_runner.h"
+
+namespace fs = std::filesystem;
+
+namespace estlab {
+
+std::vector<std::string> RunsColumns(const StudyConfig& config) {
+  std::vector<std::string> c = {"scenario", "filter", "noise", "run", "seed", "status"};
+  for (const auto& s : config.state_columns) c.push_back("rmse_" + s);
+  for (const auto& s : config.state_columns) c.push_back("mae_" + s);
+  for (const char* m :
+       {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik", "steps", "message"})
+    c.push_back(m);
+  return c;
+}
+
+std::vector<std::string> StepsColumns(const StudyConfig& config) {
+  std::vector<std::string> c = {"scenario", "filter", "noise", "run", "t"};
+  for (const auto& s : config.state_columns) c.push_back("err_" + s);
+  c.push_back("nees");
+  c.push_back("nis");
+  return c;
+}
+
+std::vector<std::string> TimingColumns() {
+  return {"scenario", "filter", "noise", "run", "us_per_step", "filter_wall_s", "truth_wall_s"};
+}
+
+namespace {
+
+// Splits one CSV line; fields may be double-quoted with "" for a quote.
+std::vector<std::string> SplitCsv(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string cur;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cur += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  fields.push_back(cur);
+  return fields;
+}
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string Join(const std::vector<std::string>& v, const std::string& sep) {
+  std::string out;
+  for (size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
+  return out;
+}
+
+double ToDouble(const std::string& s) {
+  if (s.empty()) return std::numeric_limits<double>::quiet_NaN();
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size() ? v : std::numeric_limits<double>::quiet_NaN();
+}
+
+// "%.10g": summary values for people and plots (still deterministic).
+std::string Num(double v) {
+  if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::string FormatCsvRow(const std::vector<std::string>& fields) {
+  std::string out;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    if (i) out += ',';
+    const std::string& f = fields[i];
+    if (f.find_first_of(",\"\n") == std::string::npos) {
+      out += f;
+    } else {
+      out += '"';
+      for (char c : f) {
+        if (c == '\n') c = ' ';
+        if (c == '"') out += '"';
+        out += c;
+      }
+      out += '"';
+    }
+  }
+  return out + "\n";
+}
+
+int CsvText::Column(const std::string& name) const {
+  for (size_t i = 0; i < columns.size(); ++i)
+    if (columns[i] == name) return int(i);
+  return -1;
+}
+
+CsvText ReadCsvText(const std::string& path) {
+  if (!fs::exists(path)) throw InputError("cannot read '" + path + "'");
+  CsvText t;
+  std::istringstream in(ReadAll(path));
+  std::string line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (header) {
+      t.columns = SplitCsv(line);
+      header = false;
+    } else if (!line.empty()) {
+      t.rows.push_back(SplitCsv(line));
+      if (t.rows.back().size() != t.columns.size())
+        throw InputError(path + ": row " + std::to_string(t.rows.size() + 1) + " has " +
+                         std::to_string(t.rows.back().size()) + " fields, the header " +
+                         std::to_string(t.columns.size()));
+    }
+  }
+  return t;
+}
+
+RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& columns) {
+  RowFile f;
+  if (!fs::exists(path)) return f;
+  f.existed = true;
+  const std::string text = ReadAll(path);
+  size_t pos = 0;
+  bool header = true;
+  while (pos < text.size()) {
+    const size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) {  // no newline: an interrupted write
+      f.dropped_partial = true;
+      break;
+    }
+    const std::string line = text.substr(pos, nl - pos);
+    pos = nl + 1;
+    std::vector<std::string> fields = SplitCsv(line);
+    if (header) {
+      if (fields != columns)
+        throw InputError(path + ": header differs from this study's (" + Join(columns, ",") +
+                         "); it belongs to another study or version");
+      header = false;
+      continue;
+    }
+    if (fields.size() != columns.size()) {
+      f.dropped_partial = true;
+      continue;
+    }
+    f.rows.push_back(std::move(fields));
+  }
+  return f;
+}
+
+// ---------------------------------------------------------------------------
+
+void WriteStudyState(const std::string& dir, const StudyState& s) {
+  char hash[32];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(s.config_hash));
+  std::ostringstream out;
+  out << "# estlab study state: used to resume and merge; do not edit\n"
+      << "config-hash = " << hash << "\nruns = " << s.runs << "\nshard = " << s.shard << "/"
+      << s.shards << "\nstatus = " << s.status << "\nstarted = " << s.started
+      << "\nfinished = " << s.finished << "\nwall-s = " << Num(s.wall_s) << "\njobs = " << s.jobs
+      << "\n";
+  WriteTextFile(dir + "/study.state", out.str());
+}
+
+bool ReadStudyState(const std::string& dir, StudyState* s) {
+  const std::string path = dir + "/study.state";
+  if (!fs::exists(path)) return false;
+  std::istringstream in(ReadAll(path));
+  std::string line;
+  std::map<std::string, std::string> kv;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const auto eq = line.find(" = ");
+    if (eq != std::string::npos) kv[line.substr(0, eq)] = line.substr(eq + 3);
+  }
+  try {
+    s->config_hash = std::stoull(kv.at("config-hash"), nullptr, 16);
+    s->runs = std::stoi(kv.at("runs"));
+    const std::string shard = kv.at("shard");
+    s->shard = std::stoi(shard.substr(0, shard.find('/')));
+    s->shards = std::stoi(shard.substr(shard.find('/') + 1));
+    s->status = kv["status"];
+    s->started = kv["started"];
+    s->finished = kv["finished"];
+    s->wall_s = kv["wall-s"].empty() ? 0.0 : std::stod(kv["wall-s"]);
+    s->jobs = kv["jobs"].empty() ? 1 : std::stoi(kv["jobs"]);
+  } catch (const std::exception&) {
+    throw InputError(path + ": damaged study state file");
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+
+MetricStats ComputeStats(std::vector<double> v) {
+  MetricStats s;
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  s.n = long(v.size());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (v.empty()) {
+    s.mean = s.std = s.var = s.ci95_lo = s.ci95_hi = nan;
+    s.p2_5 = s.median = s.p97_5 = s.min = s.max = nan;
+    return s;
+  }
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  s.mean = sum / double(s.n);
+  double ss = 0.0;
+  for (double x : v) ss += (x - s.mean) * (x - s.mean);
+  s.var = s.n > 1 ? ss / double(s.n - 1) : 0.0;
+  s.std = std::sqrt(s.var);
+  const double half = 1.96 * s.std / std::sqrt(double(s.n));
+  s.ci95_lo = s.mean - half;
+  s.ci95_hi = s.mean + half;
+  std::sort(v.begin(), v.end());
+  auto quantile = [&](double p) {  // linear interpolation between order statistics
+    const double h = p * double(s.n - 1);
+    const size_t lo = size_t(std::floor(h));
+    const size_t hi = std::min(lo + 1, v.size() - 1);
+    return v[lo] + (h - double(lo)) * (v[hi] - v[lo]);
+  };
+  s.p2_5 = quantile(0.025);
+  s.median = quantile(0.5);
+  s.p97_5 = quantile(0.975);
+  s.min = v.front();
+  s.max = v.back();
+  return s;
+}
+
+namespace {
+
+struct Indexes {
+  std::map<std::string, int> scenario, filter, noise;
+  explicit Indexes(const StudyConfig& c) {
+    for (size_t i = 0; i < c.scenarios.size(); ++i) scenario[c.scenarios[i].name] = int(i);
+    for (size_t i = 0; i < c.filters.size(); ++i) filter[c.filters[i].name] = int(i);
+    for (size_t i = 0; i < c.noises.size(); ++i) noise[c.noises[i].name] = int(i);
+  }
+};
+
+// Sorts rows (scenario, filter, noise, run, ...) into (scenario, run, filter,
+// noise) order, keeping the order of rows with equal keys.
+void SortCanonical(const StudyConfig& c, const std::string& path,
+                   std::vector<std::vector<std::string>>* rows) {
+  const Indexes idx(c);
+  struct Key {
+    int s, f, n;
+    long run;
+  };
+  std::vector<Key> keys;
+  for (const auto& r : *rows) {
+    const auto s = idx.scenario.find(r[0]);
+    const auto f = idx.filter.find(r[1]);
+    const auto n = idx.noise.find(r[2]);
+    if (s == idx.scenario.end() || f == idx.filter.end() || n == idx.noise.end())
+      throw InputError(path + ": row for " + r[0] + "/" + r[1] + "/" + r[2] +
+                       " which this study does not have");
+    keys.push_back({s->second, f->second, n->second, std::stol(r[3])});
+  }
+  std::vector<size_t> order(rows->size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const Key& x = keys[a];
+    const Key& y = keys[b];
+    if (x.s != y.s) return x.s < y.s;
+    if (x.run != y.run) return x.run < y.run;
+    if (x.f != y.f) return x.f < y.f;
+    return x.n < y.n;
+  });
+  std::vector<std::vector<std::string>> sorted;
+  sorted.reserve(rows->size());
+  for (size_t i : order) sorted.push_back(std::move((*rows)[i]));
+  *rows = std::move(sorted);
+}
+
+void WriteRowFile(const std::string& path, const std::vector<std::string>& columns,
+                  const std::vector<std::vector<std::string>>& rows) {
+  OutputFile out(path);
+  out.stream() << FormatCsvRow(columns);
+  for (const auto& r : rows) out.stream() << FormatCsvRow(r);
+  out.Commit();
+}
+
+int ColumnIndex(const std::vector<std::string>& cols, const std::string& name) {
+  const auto it = std::find(cols.begin(), cols.end(), name);
+  return it == cols.end() ? -1 : int(it - cols.begin());
+}
+
+std::string GroupKey(const std::string& s, const std::string& f, const std::string& n) {
+  return s + "/" + f + "/" + n;
+}
+
+}  // namespace
+
+long CountFinishedRuns(const StudyConfig& config, const std::string& dir) {
+  const RowFile runs = ReadRowFile(dir + "/runs.csv", RunsColumns(config));
+  const Indexes idx(config);
+  std::map<std::pair<std::string, std::string>, size_t> count;
+  for (const auto& r : runs.rows) ++count[{r[0], r[3]}];
+  long finished = 0;
+  for (const auto& [key, n] : count) {
+    const auto s = idx.scenario.find(key.first);
+    if (s != idx.scenario.end() && n == config.scenarios[s->second].combos.size()) ++finished;
+  }
+  return finished;
+}
+
+std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
+  const auto runs_cols = RunsColumns(config);
+  const auto steps_cols = StepsColumns(config);
+  RowFile runs = ReadRowFile(dir + "/runs.csv", runs_cols);
+  RowFile steps = ReadRowFile(dir + "/steps.csv", steps_cols);
+  RowFile timing = ReadRowFile(dir + "/timing.csv", TimingColumns());
+  SortCanonical(config, dir + "/runs.csv", &runs.rows);
+  SortCanonical(config, dir + "/steps.csv", &steps.rows);
+  SortCanonical(config, dir + "/timing.csv", &timing.rows);
+  WriteRowFile(dir + "/runs.csv", runs_cols, runs.rows);
+  WriteRowFile(dir + "/steps.csv", steps_cols, steps.rows);
+  WriteRowFile(dir + "/timing.csv", TimingColumns(), timing.rows);
+
+  // Per-group values of every metric, runs with status ok only.
+  StudyTables tables;
+  std::set<std::string> ok_runs;  // "scenario/filter/noise#run"
+  for (const auto& r : runs.rows) {
+    const std::string g = GroupKey(r[0], r[1], r[2]);
+    GroupValues& gv = tables.groups[g];
+    ++gv.runs;
+    if (r[5] != "ok") continue;
+    ok_runs.insert(g + "#" + r[3]);
+    ++gv.ok;
+    gv.run_index.push_back(std::stol(r[3]));
+    for (size_t j = 6; j + 1 < runs_cols.size(); ++j) {
+      if (runs_cols[j] == "steps") continue;
+      gv.values[runs_cols[j]].push_back(ToDouble(r[j]));
+    }
+  }
+  for (const auto& r : timing.rows) {
+    tables.groups[GroupKey(r[0], r[1], r[2])].us_per_step.push_back(ToDouble(r[4]));
+  }
+
+  // summary.csv
+  {
+    OutputFile out(dir + "/summary.csv");
+    out.stream() << "scenario,filter,noise,metric,runs,n,mean,std,var,ci95_lo,ci95_hi,p2_5,"
+                    "median,p97_5,min,max\n";
+    for (const ScenarioConfig& sc : config.scenarios) {
+      std::vector<std::string> metrics;
+      for (const auto& st : sc.model->states) metrics.push_back("rmse_" + st);
+      for (const auto& st : sc.model->states) metrics.push_back("mae_" + st);
+      for (const char* m : {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik"})
+        metrics.push_back(m);
+      for (const Combo& cb : sc.combos) {
+        const std::string& f = config.filters[cb.filter].name;
+        const std::string& n = config.noises[cb.noise].name;
+        const auto it = tables.groups.find(GroupKey(sc.name, f, n));
+        if (it == tables.groups.end()) continue;
+        for (const auto& metric : metrics) {
+          const MetricStats s = ComputeStats(it->second.values[metric]);
+          out.stream() << FormatCsvRow({sc.name, f, n, metric, std::to_string(it->second.runs),
+                                        std::to_string(s.n), Num(s.mean), Num(s.std), Num(s.var),
+                                        Num(s.ci95_lo), Num(s.ci95_hi), Num(s.p2_5), Num(s.median),
+                                        Num(s.p97_5), Num(s.min), Num(s.max)});
+        }
+      }
+    }
+    out.Commit();
+  }
+
+  // time_metrics.csv: per group and time, over the ok runs.
+  {
+    const int t_col = 4;
+    const int nees_col = ColumnIndex(steps_cols, "nees");
+    const int nis_col = ColumnIndex(steps_cols, "nis");
+    struct Acc {
+      long n = 0, n_nees = 0, n_nis = 0;
+      std::vector<double> sq;
+      double nees = 0, nis = 0;
+    };
+    std::map<std::string, std::map<double, Acc>> acc;
+    const size_t ns = config.state_columns.size();
+    for (const auto& r : steps.rows) {
+      const std::string g = GroupKey(r[0], r[1], r[2]);
+      if (!ok_runs.count(g + "#" + r[3])) continue;
+      Acc& a = acc[g][ToDouble(r[t_col])];
+      if (a.sq.empty()) a.sq.assign(ns, 0.0);
+      ++a.n;
+      for (size_t i = 0; i < ns; ++i) {
+        const double e = ToDouble(r[t_col + 1 + i]);
+        if (std::isfinite(e)) a.sq[i] += e * e;
+      }
+      const double nees = ToDouble(r[nees_col]), nis = ToDouble(r[nis_col]);
+      if (std::isfinite(nees)) a.nees += nees, ++a.n_nees;
+      if (std::isfinite(nis)) a.nis += nis, ++a.n_nis;
+    }
+    OutputFile out(dir + "/time_metrics.csv");
+    std::vector<std::string> header = {"scenario", "filter", "noise", "t", "n"};
+    for (const auto& st : config.state_columns) header.push_back("rmse_" + st);
+    for (const char* c :
+         {"mean_nees", "nees_lo95", "nees_hi95", "mean_nis", "nis_lo95", "nis_hi95"})
+      header.push_back(c);
+    out.stream() << FormatCsvRow(header);
+    for (const ScenarioConfig& sc : config.scenarios) {
+      const int nx = int(sc.model->states.size());
+      const int nz = int(sc.model->FindMeasurement(sc.truth.measurement).outputs.size());
+      for (const Combo& cb : sc.combos) {
+        const std::string& f = config.filters[cb.filter].name;
+        const std::string& n = config.noises[cb.noise].name;
+        const auto it = acc.find(GroupKey(sc.name, f, n));
+        if (it == acc.end()) continue;
+        for (const auto& [t, a] : it->second) {
+          std::vector<std::string> row = {sc.name, f, n, Num(t), std::to_string(a.n)};
+          for (size_t i = 0; i < ns; ++i) {
+            const bool has = std::find(sc.model->states.begin(), sc.model->states.end(),
+                                       config.state_columns[i]) != sc.model->states.end();
+            row.push_back(has ? Num(std::sqrt(a.sq[i] / double(a.n))) : "");
+          }
+          // Bounds of the average over N runs at one time: N * mean ~ chi2(N dim).
+          double b[2];
+          ChiSquareBounds95(a.n_nees, nx, b);
+          row.push_back(a.n_nees ? Num(a.nees / double(a.n_nees)) : "");
+          row.push_back(Num(b[0]));
+          row.push_back(Num(b[1]));
+          ChiSquareBounds95(a.n_nis, nz, b);
+          row.push_back(a.n_nis ? Num(a.nis / double(a.n_nis)) : "");
+          row.push_back(Num(b[0]));
+          row.push_back(Num(b[1]));
+          out.stream() << FormatCsvRow(row);
+        }
+      }
+    }
+    out.Commit();
+  }
+
+  StudyState state;
+  ReadStudyState(dir, &state);
+  const std::string report = StudyReportMarkdown(config, tables, state);
+  WriteTextFile(dir + "/report.md", report);
+  return report;
+}
+
+// ---------------------------------------------------------------------------
+
+void MergeStudies(const std::string& out, const std::vector<std::string>& shard_dirs) {
+  if (shard_dirs.empty()) throw InputError("merge: no shard folders given");
+  if (fs::exists(out) && !(fs::is_directory(out) && fs::is_empty(out)))
+    throw InputError("merge: '" + out + "' exists and is not an empty folder");
+  std::vector<StudyState> states(shard_dirs.size());
+  for (size_t i = 0; i < shard_dirs.size(); ++i) {
+    if (!ReadStudyState(shard_dirs[i], &states[i]))
+      throw InputError("merge: '" + shard_dirs[i] +
+                       "' is not a study results folder (no study.state)");
+  }
+  const std::string config_text = ReadAll(shard_dirs[0] + "/config.ini");
+  const StudyConfig config = ParseStudyConfig(config_text, shard_dirs[0] + "/config.ini");
+  const StudyState& first = states[0];
+  if (ConfigHash(config_text) != first.config_hash)
+    throw InputError("merge: " + shard_dirs[0] + "/config.ini does not match its study.state");
+  std::set<int> shards_seen;
+  for (size_t i = 0; i < shard_dirs.size(); ++i) {
+    const StudyState& s = states[i];
+    if (s.config_hash != first.config_hash || s.runs != first.runs || s.shards != first.shards)
+      throw InputError("merge: '" + shard_dirs[i] +
+                       "' is a different study (config, runs or "
+                       "shard count differ from '" +
+                       shard_dirs[0] + "')");
+    if (!shards_seen.insert(s.shard).second)
+      throw InputError("merge: shard " + std::to_string(s.shard) + "/" + std::to_string(s.shards) +
+                       " given twice ('" + shard_dirs[i] + "')");
+    if (s.status != "complete")
+      throw InputError("merge: '" + shard_dirs[i] + "' is " + s.status +
+                       "; run its study command again to finish it");
+  }
+  if (int(shards_seen.size()) != first.shards) {
+    std::string missing;
+    for (int k = 1; k <= first.shards; ++k)
+      if (!shards_seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k);
+    throw InputError("merge: shard(s) " + missing + " of " + std::to_string(first.shards) +
+                     " missing");
+  }
+  fs::create_directories(out);
+  std::vector<std::vector<std::string>> runs, steps, timing;
+  double wall = 0.0;
+  for (size_t i = 0; i < shard_dirs.size(); ++i) {
+    const auto add = [&](const std::string& name, const std::vector<std::string>& cols,
+                         std::vector<std::vector<std::string>>* rows) {
+      RowFile f = ReadRowFile(shard_dirs[i] + "/" + name, cols);
+      for (auto& r : f.rows) rows->push_back(std::move(r));
+    };
+    add("runs.csv", RunsColumns(config), &runs);
+    add("steps.csv", StepsColumns(config), &steps);
+    add("timing.csv", TimingColumns(), &timing);
+    wall += states[i].wall_s;
+    const fs::path ts = fs::path(shard_dirs[i]) / "timeseries";
+    if (fs::exists(ts))
+      fs::copy(ts, fs::path(out) / "timeseries",
+               fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  }
+  std::set<std::string> seen;
+  for (const auto& r : runs)
+    if (!seen.insert(r[0] + "/" + r[1] + "/" + r[2] + "#" + r[3]).second)
+      throw InputError("merge: run " + r[3] + " of " + r[0] + "/" + r[1] + "/" + r[2] +
+                       " occurs in two shards");
+  WriteTextFile(out + "/config.ini", config_text);
+  WriteRowFile(out + "/runs.csv", RunsColumns(config), runs);
+  WriteRowFile(out + "/steps.csv", StepsColumns(config), steps);
+  WriteRowFile(out + "/timing.csv", TimingColumns(), timing);
+  StudyState merged = first;
+  merged.shard = merged.shards = 1;
+  merged.status = "complete";
+  merged.wall_s = wall;
+  merged.started = first.started;
+  merged.finished = first.finished;
+  for (const auto& s : states) {
+    merged.started = std::min(merged.started, s.started);
+    merged.finished = std::max(merged.finished, s.finished);
+  }
+  WriteStudyState(out, merged);
+  FinalizeStudy(config, out);
+  WriteTextFile(out + "/manifest.json", StudyManifestJson(config, merged, shard_dirs));
+}
+
+}  // namespace estlab

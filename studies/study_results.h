@@ -1,0 +1,94 @@
+// The files of a study results folder and how they are combined.
+//
+//   DIR/config.ini        the study file as given
+//   DIR/study.state       config hash, runs, shard, status (for resume and merge)
+//   DIR/manifest.json     config, seeds, versions, host, times
+//   DIR/runs.csv          one row per scenario x run x filter x noise
+//   DIR/steps.csv         per-step errors, NEES, NIS (every k-th step) of every run
+//   DIR/timing.csv        wall-clock cost per run and filter
+//   DIR/summary.csv       per scenario x filter x noise and metric: mean, spread, intervals
+//   DIR/time_metrics.csv  per group and time: RMSE over runs, mean NEES/NIS with bounds
+//   DIR/timeseries/       full time series of the kept runs
+//   DIR/report.md         tables and the paper's numbers beside ours
+//
+// runs.csv, steps.csv, summary.csv and time_metrics.csv depend only on the
+// configuration and the runs done: they are byte-identical whatever --jobs,
+// however the study was sharded, and however often it was interrupted. Wall
+// times (timing.csv, manifest.json, report.md) are not.
+//
+// Usage:
+//   FinalizeStudy(config, "results/paper002");   // after the last run
+//   MergeStudies("results/all", {"results/s1", "results/s2"});
+#ifndef ESTLAB_STUDIES_STUDY_RESULTS_H_
+#define ESTLAB_STUDIES_STUDY_RESULTS_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "studies/study_config.h"
+
+namespace estlab {
+
+// Column headers of the per-run files.
+std::vector<std::string> RunsColumns(const StudyConfig& config);
+std::vector<std::string> StepsColumns(const StudyConfig& config);
+std::vector<std::string> TimingColumns();
+
+// A CSV row file written run by run: the header and the rows, with a partial
+// last line (an interrupted write) dropped. Throws InputError when the
+// header differs from `columns`. A missing file reads as empty.
+struct RowFile {
+  std::vector<std::vector<std::string>> rows;
+  bool existed = false;
+  bool dropped_partial = false;
+};
+RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& columns);
+std::string FormatCsvRow(const std::vector<std::string>& fields);
+
+// Any CSV with a header row, as text (summary.csv, time_metrics.csv).
+struct CsvText {
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+  int Column(const std::string& name) const;  // -1 when absent
+};
+CsvText ReadCsvText(const std::string& path);  // throws InputError when unreadable
+
+// The study.state file.
+struct StudyState {
+  uint64_t config_hash = 0;
+  int runs = 0;
+  int shard = 1, shards = 1;
+  std::string status;  // running | interrupted | complete
+  std::string started, finished;
+  double wall_s = 0.0;
+  int jobs = 1;
+};
+void WriteStudyState(const std::string& dir, const StudyState& state);
+// Returns false when DIR has no study.state.
+bool ReadStudyState(const std::string& dir, StudyState* state);
+
+// Per-group statistics of one metric over the runs whose status is ok.
+struct MetricStats {
+  long n = 0;
+  double mean = 0, std = 0, var = 0;
+  double ci95_lo = 0, ci95_hi = 0;                           // mean -+ 1.96 std / sqrt(n)
+  double p2_5 = 0, median = 0, p97_5 = 0, min = 0, max = 0;  // linear interpolation
+};
+MetricStats ComputeStats(std::vector<double> values);
+
+// Sorts the run files of DIR into canonical order (scenario, run, filter,
+// noise), then writes summary.csv, time_metrics.csv and report.md. Returns
+// the report text.
+std::string FinalizeStudy(const StudyConfig& config, const std::string& dir);
+
+// Joins complete shard folders of one study into `out` (which must not
+// exist or be empty). Throws InputError on mismatched or incomplete shards.
+void MergeStudies(const std::string& out, const std::vector<std::string>& shard_dirs);
+
+// Number of finished runs (all filter x noise rows present) in DIR/runs.csv.
+long CountFinishedRuns(const StudyConfig& config, const std::string& dir);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_STUDIES_STUDY_RESULTS_H_

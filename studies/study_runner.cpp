@@ -1,0 +1,557 @@
+#include "studies/study_runner.h"
+
+#include <unistd.h>
+
+#include <ceres/version.h>
+#include <sundials/sundials_config.h>
+#include <Eigen/Cholesky>
+#include <boost/version.hpp>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <ctime>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "estlab_version.h"
+#include "src/core/random.h"
+#include "src/core/types.h"
+#include "src/io/json.h"
+#include "src/io/output_file.h"
+
+namespace fs = std::filesystem;
+
+namespace estlab {
+
+bool StudyRunOptions::IsValid(std::string* error) const {
+  if (out_dir.empty()) return *error = "the output folder is empty", false;
+  if (runs < 0) return *error = "runs must be >= 1", false;
+  if (jobs < 0 || jobs > 1024) return *error = "jobs must be in 1..1024", false;
+  if (shards < 1 || shard < 1 || shard > shards)
+    return *error = "shard must be k/N with 1 <= k <= N", false;
+  return true;
+}
+
+namespace {
+
+std::string Sig6(double v) {
+  if (std::isnan(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string Full(double v) { return FormatDouble(v); }  // %.17g, NaN = ""
+
+std::string HexHash(uint64_t h) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string NowUtc() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// The text one run adds to each file, formatted by the worker.
+struct RunText {
+  std::string runs, steps, timing;
+  long failed = 0;
+};
+
+struct RunContext {
+  const StudyConfig* config;
+  std::string dir;
+  int every = 1;
+  std::set<int> keep;
+};
+
+// Particle-filter seeds: from the run seed and the names, so that adding or
+// reordering filters leaves the others' draws alone.
+uint64_t ComboSeed(uint64_t run_seed, const std::string& filter, const std::string& noise) {
+  return DeriveSeed({run_seed, ConfigHash("filter:" + filter), ConfigHash("noise:" + noise)});
+}
+
+std::vector<double> SampleX0(const ScenarioConfig& sc, uint64_t run_seed) {
+  const int n = int(sc.truth.x0.size());
+  Eigen::MatrixXd P(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) P(i, j) = sc.prior_p0[i * n + j];
+  const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(P).matrixL();
+  Rng rng(DeriveSeed({run_seed, 0x7830ull}));  // "x0"
+  Eigen::VectorXd w(n);
+  for (int i = 0; i < n; ++i) w(i) = rng.Normal();
+  const Eigen::VectorXd d = L * w;
+  std::vector<double> x0 = sc.truth.x0;
+  for (int i = 0; i < n; ++i) x0[i] += d(i);
+  return x0;
+}
+
+int Column(const std::vector<std::string>& cols, const std::string& name) {
+  for (size_t i = 0; i < cols.size(); ++i)
+    if (cols[i] == name) return int(i);
+  return -1;
+}
+
+void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
+                     const std::string& filter, const std::string& noise, const FilterData& data,
+                     const FilterRunOutput& out) {
+  const auto& states = sc.model->states;
+  const int n = int(states.size());
+  const fs::path folder = fs::path(ctx.dir) / "timeseries" / sc.name;
+  fs::create_directories(folder);
+  OutputFile file(
+      (folder / ("run" + std::to_string(run) + "_" + filter + "_" + noise + ".csv")).string());
+  std::ostream& os = file.stream();
+  os << "t";
+  for (const auto& s : states)
+    os << "," << s << "_true," << s << "_est," << s << "_lo2sd," << s << "_hi2sd," << s << "_err";
+  os << ",nees,nis\n";
+  const int nees_c = Column(out.columns, "nees"), nis_c = Column(out.columns, "nis");
+  for (size_t k = 0; k < out.rows.size(); ++k) {
+    const auto& r = out.rows[k];
+    os << Full(r[0]);
+    for (int i = 0; i < n; ++i) {
+      const double est = r[Column(out.columns, states[i] + "_est")];
+      const double sd = std::sqrt(std::max(0.0, r[Column(out.columns, states[i] + "_var")]));
+      os << "," << Full(data.truth[k * n + i]) << "," << Full(est) << "," << Full(est - 2 * sd)
+         << "," << Full(est + 2 * sd) << "," << Full(r[Column(out.columns, states[i] + "_err")]);
+    }
+    os << "," << Full(nees_c >= 0 ? r[nees_c] : NAN) << "," << Full(nis_c >= 0 ? r[nis_c] : NAN)
+       << "\n";
+  }
+  file.Commit();
+}
+
+RunText RunOne(const RunContext& ctx, int s, int run) {
+  const StudyConfig& c = *ctx.config;
+  const ScenarioConfig& sc = c.scenarios[s];
+  const ModelEntry& model = *sc.model;
+  const uint64_t seed = DeriveSeed({c.study.seed, uint64_t(s), uint64_t(run)});
+  const auto& states = model.states;
+  const int n = int(states.size());
+
+  SimulationSpec sim = sc.truth;
+  sim.seed = seed;
+  if (sc.sample_x0) sim.x0 = SampleX0(sc, seed);
+  SimulationResult truth;
+  std::string truth_error;
+  try {
+    truth = model.simulate(sim);
+    if (!truth.ok) truth_error = "truth simulation failed: " + truth.error;
+  } catch (const std::exception& e) {
+    truth_error = std::string("truth simulation failed: ") + e.what();
+  }
+
+  FilterData data;
+  data.path = "scenario " + sc.name + " run " + std::to_string(run);
+  if (truth_error.empty()) {
+    data.m = int(truth.columns.size()) - 1 - n;
+    data.has_truth = true;
+    for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
+      const auto& row = truth.rows[k];
+      data.t.push_back(row[0]);
+      data.lines.push_back(long(k));
+      for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
+      for (int j = 0; j < data.m; ++j) data.z.push_back(row[1 + n + j]);
+    }
+  }
+
+  RunText text;
+  for (const Combo& cb : sc.combos) {
+    const std::string& fname = c.filters[cb.filter].name;
+    const std::string& nname = c.noises[cb.noise].name;
+    const std::vector<std::string> key = {sc.name, fname, nname, std::to_string(run)};
+    FilterRunOutput out;
+    std::string status = "ok", message;
+    if (!truth_error.empty()) {
+      status = "truth_failed";
+      message = truth_error;
+    } else {
+      FilterSpec spec = cb.spec;
+      spec.seed = ComboSeed(seed, fname, nname);
+      try {
+        out = model.run_filter(spec, data);
+        if (!out.summary.ok) {
+          status = out.summary.status.empty() ? "failed" : out.summary.status;
+          message = out.summary.message;
+        }
+      } catch (const std::exception& e) {
+        status = "error";
+        message = e.what();
+      }
+    }
+    if (status != "ok") ++text.failed;
+    const FilterSummary& sum = out.summary;
+
+    std::vector<std::string> row = key;
+    row.push_back(std::to_string(seed));
+    row.push_back(status);
+    for (const char* kind : {"rmse", "mae"}) {
+      const auto& v = std::string(kind) == "rmse" ? sum.rmse : sum.mae;
+      for (const auto& col : c.state_columns) {
+        const int i = Column(states, col);
+        row.push_back(i >= 0 && size_t(i) < v.size() ? Full(v[i]) : "");
+      }
+    }
+    const bool ran = status == "ok" || !out.rows.empty();
+    auto inside = [](double v, const double b[2]) {
+      return std::isfinite(v) ? std::string(v >= b[0] && v <= b[1] ? "1" : "0") : std::string();
+    };
+    row.push_back(ran ? Full(sum.mean_nees) : "");
+    row.push_back(ran ? Full(sum.mean_nis) : "");
+    row.push_back(ran ? inside(sum.mean_nees, sum.nees_bounds95) : "");
+    row.push_back(ran ? inside(sum.mean_nis, sum.nis_bounds95) : "");
+    row.push_back(ran ? Full(sum.loglik) : "");
+    row.push_back(std::to_string(sum.steps));
+    row.push_back(message);
+    text.runs += FormatCsvRow(row);
+
+    std::vector<std::string> timing = key;
+    timing.push_back(Sig6(sum.us_per_step));
+    timing.push_back(Sig6(sum.wall_s));
+    timing.push_back(Sig6(truth.wall_s));
+    text.timing += FormatCsvRow(timing);
+
+    // Per-step errors, every `every` steps and the last.
+    std::vector<int> err_cols;
+    for (const auto& col : c.state_columns) {
+      const int i = Column(states, col);
+      err_cols.push_back(i >= 0 ? Column(out.columns, col + "_err") : -1);
+    }
+    const int nees_c = Column(out.columns, "nees"), nis_c = Column(out.columns, "nis");
+    for (size_t k = 0; k < out.rows.size(); ++k) {
+      if (k % size_t(ctx.every) != 0 && k + 1 != out.rows.size()) continue;
+      const auto& r = out.rows[k];
+      std::vector<std::string> step = key;
+      step.push_back(Full(r[0]));
+      for (int col : err_cols) step.push_back(col >= 0 ? Sig6(r[col]) : "");
+      step.push_back(nees_c >= 0 ? Sig6(r[nees_c]) : "");
+      step.push_back(nis_c >= 0 ? Sig6(r[nis_c]) : "");
+      text.steps += FormatCsvRow(step);
+    }
+    if (ctx.keep.count(run) && !out.rows.empty())
+      WriteTimeseries(ctx, sc, run, fname, nname, data, out);
+  }
+  return text;
+}
+
+// ---------------------------------------------------------------------------
+
+class Progress {
+ public:
+  Progress(long total, long resumed, bool enabled)
+      : total_(total),
+        done_(resumed),
+        resumed_(resumed),
+        enabled_(enabled && total > 0),
+        tty_(::isatty(2) == 1),
+        start_(std::chrono::steady_clock::now()),
+        last_(start_) {}
+
+  void Update(long done, bool final) {
+    done_ = done;
+    if (!enabled_) return;
+    const auto now = std::chrono::steady_clock::now();
+    const double since = std::chrono::duration<double>(now - last_).count();
+    if (!final && since < (tty_ ? 0.2 : 5.0)) return;
+    last_ = now;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const double rate = elapsed > 0 ? double(done_ - resumed_) / elapsed : 0.0;
+    const double eta = rate > 0 ? double(total_ - done_) / rate : 0.0;
+    char buf[160];
+    if (tty_) {
+      const int width = 30;
+      const int filled = int(width * double(done_) / double(total_));
+      std::string bar(filled, '=');
+      if (filled < width) bar += '>' + std::string(width - filled - 1, ' ');
+      std::snprintf(buf, sizeof buf, "\r[%s] %ld/%ld runs  %.1f runs/s  ETA %s   ", bar.c_str(),
+                    done_, total_, rate, Duration(eta).c_str());
+      std::cerr << buf << (final ? "\n" : "") << std::flush;
+    } else {
+      std::snprintf(buf, sizeof buf, "estlab study: %ld/%ld runs (%.0f %%), %.1f runs/s, ETA %s\n",
+                    done_, total_, 100.0 * double(done_) / double(total_), rate,
+                    Duration(eta).c_str());
+      std::cerr << buf << std::flush;
+    }
+  }
+
+ private:
+  static std::string Duration(double s) {
+    char buf[32];
+    const long t = long(std::lround(s));
+    if (t >= 3600)
+      std::snprintf(buf, sizeof buf, "%ldh%02ldm", t / 3600, (t / 60) % 60);
+    else if (t >= 60)
+      std::snprintf(buf, sizeof buf, "%ldm%02lds", t / 60, t % 60);
+    else
+      std::snprintf(buf, sizeof buf, "%lds", t);
+    return buf;
+  }
+  long total_, done_, resumed_;
+  bool enabled_, tty_;
+  std::chrono::steady_clock::time_point start_, last_;
+};
+
+// Keeps only the rows of finished runs (and of runs < `runs`) in a row file.
+void KeepFinished(const std::string& path, const std::vector<std::string>& cols,
+                  const std::set<std::pair<std::string, long>>& finished) {
+  RowFile f = ReadRowFile(path, cols);
+  OutputFile out(path);
+  out.stream() << FormatCsvRow(cols);
+  for (const auto& r : f.rows)
+    if (finished.count({r[0], std::stol(r[3])})) out.stream() << FormatCsvRow(r);
+  out.Commit();
+}
+
+void AppendOrThrow(std::ofstream& file, const std::string& text, const std::string& path) {
+  file << text;
+  file.flush();
+  if (!file) throw InputError("error while writing '" + path + "'");
+}
+
+}  // namespace
+
+std::string StudyManifestJson(const StudyConfig& c, const StudyState& state,
+                              const std::vector<std::string>& merged_from) {
+  JsonWriter j;
+  j.BeginObject();
+  j.Key("study").Value(c.study.name).Key("title").Value(c.title).Key("paper").Value(c.paper);
+  j.Key("description").Value(c.study.description);
+  j.Key("status").Value(state.status);
+  j.Key("runs").Value(state.runs).Key("shard").Value(state.shard).Key("shards").Value(state.shards);
+  j.Key("jobs").Value(state.jobs);
+  j.Key("started").Value(state.started).Key("finished").Value(state.finished);
+  j.Key("wall_s").Value(state.wall_s);
+  j.Key("seed").Value(long(c.study.seed));
+  j.Key("seed_rule")
+      .Value(
+          "truth of run i of scenario s: DeriveSeed({seed, s, i}); particle filter of that run: "
+          "DeriveSeed({run seed, FNV1a(\"filter:\" name), FNV1a(\"noise:\" name)}); truth-x0 = "
+          "sample: DeriveSeed({run seed, 0x7830})");
+  j.Key("scenarios").BeginArray();
+  for (size_t s = 0; s < c.scenarios.size(); ++s) {
+    const ScenarioConfig& sc = c.scenarios[s];
+    j.BeginObject().Key("index").Value(long(s)).Key("name").Value(sc.name);
+    j.Key("model").Value(sc.model->name).Key("params").Value(sc.truth.params);
+    j.Key("measurement").Value(sc.truth.measurement);
+    j.Key("dt").Value(sc.truth.dt).Key("steps").Value(sc.steps);
+    j.Key("truth").Value(sc.truth_description);
+    j.Key("first_run_seed").Value(std::to_string(DeriveSeed({c.study.seed, uint64_t(s), 0})));
+    j.Key("combos").BeginArray();
+    for (const Combo& cb : sc.combos)
+      j.Value(c.filters[cb.filter].name + "/" + c.noises[cb.noise].name);
+    j.EndArray().EndObject();
+  }
+  j.EndArray();
+  j.Key("config_path").Value(c.path).Key("config_hash").Value(HexHash(ConfigHash(c.text)));
+  j.Key("config").Value(c.text);
+  if (!merged_from.empty()) j.Key("merged_from").Value(merged_from);
+  j.Key("estlab_version").Value(ESTLAB_VERSION).Key("git_commit").Value(ESTLAB_GIT_COMMIT);
+  j.Key("sundials_version").Value(SUNDIALS_VERSION);
+  j.Key("ceres_version").Value(CERES_VERSION_STRING);
+  j.Key("eigen_version")
+      .Value(std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
+             std::to_string(EIGEN_MINOR_VERSION));
+  j.Key("boost_version")
+      .Value(std::to_string(BOOST_VERSION / 100000) + "." +
+             std::to_string(BOOST_VERSION / 100 % 1000) + "." +
+             std::to_string(BOOST_VERSION % 100));
+  j.Key("compiler").Value(__VERSION__);
+  char host[256] = "unknown";
+  ::gethostname(host, sizeof host - 1);
+  j.Key("host").Value(host);
+  j.Key("hardware_threads").Value(long(std::thread::hardware_concurrency()));
+  j.EndObject();
+  return j.str() + "\n";
+}
+
+StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError(error);
+  const auto wall_start = std::chrono::steady_clock::now();
+  const std::string& dir = options.out_dir;
+  const int runs = options.runs > 0 ? options.runs : config.study.runs;
+  const int jobs = options.jobs > 0 ? options.jobs : config.study.jobs;
+
+  // The folder: new, or results of this very study and shard to resume.
+  StudyState state;
+  const bool resuming = ReadStudyState(dir, &state);
+  if (resuming) {
+    if (state.config_hash != ConfigHash(config.text))
+      throw InputError("'" + dir + "' holds results of a different configuration (" + dir +
+                       "/config.ini); use another --out or delete it");
+    if (state.shard != options.shard || state.shards != options.shards)
+      throw InputError("'" + dir + "' holds shard " + std::to_string(state.shard) + "/" +
+                       std::to_string(state.shards) + ", not " + std::to_string(options.shard) +
+                       "/" + std::to_string(options.shards));
+  } else if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir))) {
+    throw InputError("'" + dir + "' exists and is not a study results folder (no study.state)");
+  }
+  fs::create_directories(dir);
+  if (!resuming) WriteTextFile(dir + "/config.ini", config.text);
+  state.config_hash = ConfigHash(config.text);
+  state.runs = runs;
+  state.shard = options.shard;
+  state.shards = options.shards;
+  state.status = "running";
+  state.jobs = jobs;
+  if (!resuming || state.started.empty()) state.started = NowUtc();
+  const double previous_wall = resuming ? state.wall_s : 0.0;
+  state.finished.clear();
+  WriteStudyState(dir, state);
+
+  // Finished runs: every filter x noise row present; keep only their rows.
+  const auto runs_cols = RunsColumns(config), steps_cols = StepsColumns(config);
+  std::set<std::pair<std::string, long>> finished;
+  {
+    const RowFile f = ReadRowFile(dir + "/runs.csv", runs_cols);
+    std::map<std::pair<std::string, long>, size_t> count;
+    for (const auto& r : f.rows) ++count[{r[0], std::stol(r[3])}];
+    for (const auto& sc : config.scenarios)
+      for (long i = 0; i < runs; ++i) {
+        const auto it = count.find({sc.name, i});
+        if (it != count.end() && it->second == sc.combos.size() &&
+            i % options.shards == options.shard - 1)
+          finished.insert({sc.name, i});
+      }
+    KeepFinished(dir + "/runs.csv", runs_cols, finished);
+    KeepFinished(dir + "/steps.csv", steps_cols, finished);
+    KeepFinished(dir + "/timing.csv", TimingColumns(), finished);
+  }
+
+  struct Task {
+    int scenario, run;
+  };
+  std::vector<Task> tasks;
+  long total = 0;
+  for (size_t s = 0; s < config.scenarios.size(); ++s)
+    for (int i = 0; i < runs; ++i) {
+      if (i % options.shards != options.shard - 1) continue;
+      ++total;
+      if (!finished.count({config.scenarios[s].name, i})) tasks.push_back({int(s), i});
+    }
+
+  WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
+
+  RunContext ctx;
+  ctx.config = &config;
+  ctx.dir = dir;
+  int max_steps = 1;
+  for (const auto& sc : config.scenarios) max_steps = std::max(max_steps, sc.steps + 1);
+  ctx.every = config.study.step_metrics_every > 0 ? config.study.step_metrics_every
+                                                  : (max_steps + 199) / 200;
+  ctx.keep.insert(config.study.keep_runs.begin(), config.study.keep_runs.end());
+
+  std::ofstream runs_file(dir + "/runs.csv", std::ios::app | std::ios::binary);
+  std::ofstream steps_file(dir + "/steps.csv", std::ios::app | std::ios::binary);
+  std::ofstream timing_file(dir + "/timing.csv", std::ios::app | std::ios::binary);
+  if (!runs_file || !steps_file || !timing_file)
+    throw InputError("cannot append to the run files in '" + dir + "'");
+
+  // Workers take task indices; the main thread writes results in task order.
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<std::optional<RunText>> results(tasks.size());
+  std::atomic<size_t> next{0};
+  std::atomic<bool> abort{false};
+  std::exception_ptr failure;
+  int workers_done = 0;
+  const int workers = std::max(1, std::min<int>(jobs, int(tasks.size())));
+  auto stop_requested = [&] { return abort.load() || (options.stop && options.stop->load() != 0); };
+  auto worker = [&] {
+    while (!stop_requested()) {
+      const size_t idx = next.fetch_add(1);
+      if (idx >= tasks.size()) break;
+      try {
+        RunText r = RunOne(ctx, tasks[idx].scenario, tasks[idx].run);
+        std::lock_guard<std::mutex> lock(mutex);
+        results[idx] = std::move(r);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!failure) failure = std::current_exception();
+        abort = true;
+      }
+      cv.notify_one();
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    ++workers_done;
+    cv.notify_one();
+  };
+  std::vector<std::thread> threads;
+  if (!tasks.empty())
+    for (int w = 0; w < workers; ++w) threads.emplace_back(worker);
+
+  StudyRunSummary summary;
+  summary.total_runs = total;
+  summary.resumed_runs = long(finished.size());
+  Progress progress(total, summary.resumed_runs, options.progress);
+  size_t written = 0;
+  long done = summary.resumed_runs;
+  try {
+    while (!tasks.empty()) {
+      std::vector<RunText> batch;
+      bool all_done;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        cv.wait_for(lock, std::chrono::milliseconds(200), [&] {
+          return (written < results.size() && results[written]) || workers_done == workers;
+        });
+        while (written < results.size() && results[written]) {
+          batch.push_back(std::move(*results[written]));
+          results[written].reset();
+          ++written;
+        }
+        all_done = workers_done == workers;
+      }
+      for (const RunText& r : batch) {
+        // runs.csv last: a run is finished once its rows are there.
+        AppendOrThrow(steps_file, r.steps, dir + "/steps.csv");
+        AppendOrThrow(timing_file, r.timing, dir + "/timing.csv");
+        AppendOrThrow(runs_file, r.runs, dir + "/runs.csv");
+        summary.failed_filter_runs += r.failed;
+        ++done;
+      }
+      progress.Update(done, false);
+      if (all_done && batch.empty()) break;
+    }
+  } catch (...) {
+    abort = true;
+    for (auto& t : threads) t.join();
+    throw;
+  }
+  for (auto& t : threads) t.join();
+  if (failure) std::rethrow_exception(failure);
+  progress.Update(done, true);
+  runs_file.close();
+  steps_file.close();
+  timing_file.close();
+
+  summary.finished_runs = done;
+  summary.interrupted = done < total;
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  state.wall_s = previous_wall + summary.wall_s;
+  state.finished = NowUtc();
+  state.status = summary.interrupted ? "interrupted" : "complete";
+  WriteStudyState(dir, state);
+  if (!summary.interrupted) summary.report = FinalizeStudy(config, dir);
+  WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
+  return summary;
+}
+
+}  // namespace estlab

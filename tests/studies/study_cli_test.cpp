@@ -1,0 +1,192 @@
+// estlab study / merge / figures end to end: results independent of --jobs and
+// sharding, resuming after SIGTERM, and config errors that stop before any run.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "../cli/cli_test_util.h"
+#include "study_test_util.h"
+
+namespace estlab::testing {
+namespace {
+
+std::string RunsCsv(const TempDir& dir, const std::string& out) {
+  return ReadFile(dir.File(out + "/runs.csv"));
+}
+
+class StudyCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  }
+  TempDir dir_;
+};
+
+TEST_F(StudyCli, JobsDoNotChangeTheResults) {
+  WriteText(dir_.File("s.ini"), TinyStudy(6));
+  const auto r1 = RunEstlab("study s.ini --out j1 --jobs 1 --quiet", dir_.path());
+  ASSERT_EQ(r1.exit_code, 0) << r1.err;
+  const auto r2 = RunEstlab("study s.ini --out j2 --jobs 2 --quiet", dir_.path());
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  for (const char* f : {"runs.csv", "summary.csv", "steps.csv", "time_metrics.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("j1/") + f)),
+              ReadFile(dir_.File(std::string("j2/") + f)))
+        << f;
+  // 6 runs x 3 filters x 2 noise settings, plus the header.
+  const auto lines = SplitLines(RunsCsv(dir_, "j1"));
+  ASSERT_EQ(lines.size(), 37u);
+  EXPECT_EQ(
+      lines[0].rfind("scenario,filter,noise,run,seed,status,rmse_theta,rmse_omega,mae_theta,", 0),
+      0u);
+  EXPECT_EQ(lines[1].rfind("pend,ekf,oracle,0,", 0), 0u);
+  EXPECT_EQ(lines[36].rfind("pend,pf,hand,5,", 0), 0u);
+  for (size_t i = 1; i < lines.size(); ++i)
+    EXPECT_NE(lines[i].find(",ok,"), std::string::npos) << lines[i];
+  // Kept runs 0 and 2 have time series; the others do not.
+  EXPECT_TRUE(dir_.Exists("j1/timeseries/pend/run0_ukf_oracle.csv"));
+  EXPECT_TRUE(dir_.Exists("j1/timeseries/pend/run2_pf_hand.csv"));
+  EXPECT_FALSE(dir_.Exists("j1/timeseries/pend/run1_ukf_oracle.csv"));
+  const std::string report = ReadFile(dir_.File("j1/report.md"));
+  EXPECT_NE(report.find("## Scenario `pend`"), std::string::npos);
+  EXPECT_NE(report.find("| pend | ekf | oracle | rmse_theta | mean | 0.1 |"), std::string::npos);
+  EXPECT_NE(report.find("**PF beats EKF**"), std::string::npos);
+  EXPECT_NE(ReadFile(dir_.File("j1/manifest.json")).find("\"sundials_version\""),
+            std::string::npos);
+}
+
+TEST_F(StudyCli, ThreeShardsMergedEqualOneRun) {
+  WriteText(dir_.File("s.ini"), TinyStudy(7));
+  ASSERT_EQ(RunEstlab("study s.ini --out all --jobs 2 --quiet", dir_.path()).exit_code, 0);
+  for (int k = 1; k <= 3; ++k) {
+    const auto r = RunEstlab(
+        "study s.ini --quiet --out s" + std::to_string(k) + " --shard " + std::to_string(k) + "/3",
+        dir_.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  // Shard 2 holds runs 1 and 4 only.
+  for (const auto& line : SplitLines(RunsCsv(dir_, "s2"))) {
+    if (line.rfind("pend,", 0) != 0) continue;
+    EXPECT_TRUE(line.find(",1,") != std::string::npos || line.find(",4,") != std::string::npos)
+        << line;
+  }
+  const auto m = RunEstlab("merge merged s3 s1 s2", dir_.path());
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  for (const char* f : {"runs.csv", "summary.csv", "steps.csv", "time_metrics.csv",
+                        "timeseries/pend/run2_ekf_hand.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("all/") + f)),
+              ReadFile(dir_.File(std::string("merged/") + f)))
+        << f;
+  // A missing shard is an error.
+  const auto bad = RunEstlab("merge partial s1 s3", dir_.path());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("shard(s) 2 of 3 missing"), std::string::npos) << bad.err;
+}
+
+// Starts `estlab study` with stderr to a file; returns the pid.
+pid_t StartStudy(const TempDir& dir, const std::string& out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::chdir(dir.path().c_str()) != 0) ::_exit(127);
+    const int fd = ::open((out + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 2);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::execl(ESTLAB_BINARY, ESTLAB_BINARY, "study", "s.ini", "--out", out.c_str(), "--jobs", "2",
+            "--quiet", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+TEST_F(StudyCli, InterruptedStudyResumesToTheSameFiles) {
+  WriteText(dir_.File("s.ini"), TinyStudy(150, 40, 400));
+  const pid_t pid = StartStudy(dir_, "r");
+  // Wait for the first finished runs, then SIGTERM.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (SplitLines(RunsCsv(dir_, "r")).size() < 2 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_EQ(WEXITSTATUS(status), 143) << ReadFile(dir_.File("r.err"));
+  const std::string err = ReadFile(dir_.File("r.err"));
+  EXPECT_NE(err.find("r/runs.csv; run the same command again to resume"), std::string::npos) << err;
+  const size_t partial = SplitLines(RunsCsv(dir_, "r")).size();
+  EXPECT_GT(partial, 1u);
+  EXPECT_LT(partial, 1u + 150 * 6);
+  EXPECT_FALSE(dir_.Exists("r/summary.csv"));
+  // Simulate a write cut short as well: a partial last line is dropped.
+  {
+    std::ofstream f(dir_.File("r/runs.csv"), std::ios::app);
+    f << "pend,ekf,oracle,149,123,ok,0.1";
+  }
+  const auto resumed = RunEstlab("study s.ini --out r --jobs 2 --quiet", dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const auto full = RunEstlab("study s.ini --out f --jobs 1 --quiet", dir_.path());
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  for (const char* f : {"runs.csv", "summary.csv", "steps.csv", "time_metrics.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("r/") + f)),
+              ReadFile(dir_.File(std::string("f/") + f)))
+        << f;
+  // Running a finished study again does nothing and changes nothing.
+  const std::string before = RunsCsv(dir_, "r");
+  const auto again = RunEstlab("study s.ini --out r --quiet", dir_.path());
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("150 runs (150 from before)"), std::string::npos) << again.out;
+  EXPECT_EQ(RunsCsv(dir_, "r"), before);
+}
+
+TEST_F(StudyCli, FiguresWriteScriptsDataAndImages) {
+  WriteText(dir_.File("s.ini"), TinyStudy(3));
+  ASSERT_EQ(RunEstlab("study s.ini --out r --quiet", dir_.path()).exit_code, 0);
+  const auto f = RunEstlab("figures r", dir_.path());
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  for (const char* name :
+       {"pend_rmse_time", "pend_nees_nis", "pend_rmse_means", "pend_estimate_run0_ekf_oracle"}) {
+    for (const char* ext : {".gp", ".dat", ".png", ".svg"}) {
+      const std::string path = std::string("r/figures/") + name + ext;
+      EXPECT_TRUE(dir_.Exists(path)) << path;
+      if (dir_.Exists(path)) {
+        EXPECT_GT(std::filesystem::file_size(dir_.File(path)), 100u) << path;
+      }
+    }
+  }
+}
+
+// Bad configurations: exit 2, "estlab: error: FILE:LINE: ..." naming the key,
+// and no results folder (no run started). These need no filters.
+TEST(StudyCliErrors, BadConfigStopsBeforeAnyRun) {
+  TempDir dir;
+  struct Case {
+    std::string from, to, expect;
+  };
+  const std::vector<Case> cases = {
+      {"alpha = 0.5", "alpah = 0.5", "s.ini:27: unknown key 'alpah' in [filter.ukf]"},
+      {"model = pendulum", "model = pendulumm",
+       "s.ini:8: [scenario.pend] model: unknown model 'pendulumm'"},
+      {"kind = pf", "kind = particle", "s.ini:30: [filter.pf] kind: unknown filter 'particle'"},
+      {"dt = 0.05", "dt = 0.05s", "s.ini:12: [scenario.pend] dt: '0.05s' is not a number"},
+  };
+  for (const Case& c : cases) {
+    std::string text = TinyStudy(3);
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    WriteText(dir.File("s.ini"), text);
+    const auto r = RunEstlab("study s.ini --out out", dir.path());
+    EXPECT_EQ(r.exit_code, 2) << c.to;
+    EXPECT_EQ(r.err.rfind("estlab: error: " + c.expect, 0), 0u) << "got: " << r.err;
+    EXPECT_FALSE(dir.Exists("out")) << c.to;
+  }
+  const auto missing = RunEstlab("study nothere.ini --out out", dir.path());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("cannot read study config 'nothere.ini'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace estlab::testing

@@ -1,0 +1,183 @@
+// Study configuration parsing and checking (studies/study_config.h), and the
+// statistics of studies/study_results.h.
+#include "studies/study_config.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "src/core/types.h"
+#include "studies/study_results.h"
+#include "study_test_util.h"
+
+namespace estlab {
+namespace {
+
+using testing::FiltersAvailable;
+using testing::TinyStudy;
+
+// The error message of parsing `text`, or "" when it parses.
+std::string ParseError(const std::string& text) {
+  try {
+    ParseStudyConfig(text, "s.ini");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return text.replace(pos, from.size(), to);
+}
+
+TEST(StudyConfig, ParsesTheTinyStudy) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const StudyConfig c = ParseStudyConfig(TinyStudy(4), "s.ini");
+  EXPECT_EQ(c.study.name, "tiny");
+  EXPECT_EQ(c.study.seed, 7u);
+  EXPECT_EQ(c.study.runs, 4);
+  ASSERT_EQ(c.scenarios.size(), 1u);
+  const ScenarioConfig& s = c.scenarios[0];
+  EXPECT_EQ(s.name, "pend");
+  EXPECT_EQ(s.steps, 25);
+  EXPECT_DOUBLE_EQ(s.truth.t_end, 1.25);
+  EXPECT_TRUE(s.sample_x0);
+  ASSERT_EQ(s.combos.size(), 6u);  // 3 filters x 2 noise settings, filter-major
+  EXPECT_EQ(c.filters[s.combos[1].filter].name, "ekf");
+  EXPECT_EQ(c.noises[s.combos[1].noise].name, "hand");
+  // Oracle: the truth's white-acceleration Q and diagonal R.
+  const FilterSpec& oracle = s.combos[0].spec;
+  EXPECT_TRUE(oracle.q_white_accel);
+  EXPECT_DOUBLE_EQ(oracle.qc, 0.5);
+  EXPECT_EQ(oracle.r, std::vector<double>{0.01});
+  // Hand-tuned values as given; the prior holds at t = 0, before the first measurement.
+  const FilterSpec& hand = s.combos[1].spec;
+  EXPECT_FALSE(hand.q_white_accel);
+  EXPECT_EQ(hand.q, (std::vector<double>{1e-3, 0, 0, 1e-2}));
+  EXPECT_EQ(hand.r, std::vector<double>{0.02});
+  EXPECT_TRUE(hand.has_t0);
+  EXPECT_EQ(hand.p0, (std::vector<double>{0.05, 0, 0, 0.05}));
+  EXPECT_DOUBLE_EQ(hand.x0[0], 0.7853981633974483);
+  EXPECT_EQ(c.filters[2].kind, "pf");
+  EXPECT_EQ(s.combos[4].spec.particles, 100);
+  EXPECT_EQ(c.claims.size(), 1u);
+  EXPECT_EQ(c.references.size(), 1u);
+}
+
+TEST(StudyConfig, AlternativesExpandToNamedScenarios) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  std::string text = Replace(TinyStudy(3), "x0 = theta=0.7853981633974483",
+                             "x0 = pi4: theta=0.785 | pi2: theta=1.571");
+  text = Replace(text, "meas-noise-var = 0.01", "meas-noise-var = 0.01 | 1e-4");
+  const StudyConfig c = ParseStudyConfig(text, "s.ini");
+  ASSERT_EQ(c.scenarios.size(), 4u);
+  EXPECT_EQ(c.scenarios[0].name, "pend.pi4.0.01");
+  EXPECT_EQ(c.scenarios[1].name, "pend.pi4.1e-4");
+  EXPECT_EQ(c.scenarios[2].name, "pend.pi2.0.01");
+  EXPECT_DOUBLE_EQ(c.scenarios[3].truth.x0[0], 1.571);
+  EXPECT_EQ(c.scenarios[3].truth.meas_noise_var, std::vector<double>{1e-4});
+  // The prior defaults to the truth's start of the same alternative.
+  EXPECT_DOUBLE_EQ(c.scenarios[3].prior_x0[0], 1.571);
+  EXPECT_EQ(c.scenarios[1].combos[0].spec.r, std::vector<double>{1e-4});
+}
+
+TEST(StudyConfig, ErrorsNameFileLineAndKey) {
+  const std::string good = TinyStudy(2);
+  // Lines of the tiny study: 8 model, 13 steps, 21 kind = ekf, 27 alpha, 32 particles.
+  struct Case {
+    std::string from, to, expect;
+  };
+  const std::vector<Case> cases = {
+      {"alpha = 0.5", "alpah = 0.5", "s.ini:27: unknown key 'alpah' in [filter.ukf]"},
+      {"model = pendulum", "model = pendulumm",
+       "s.ini:8: [scenario.pend] model: unknown model 'pendulumm'"},
+      {"kind = ekf", "kind = ekff", "s.ini:21: [filter.ekf] kind: unknown filter 'ekff'"},
+      {"steps = 25", "steps = 2x5", "s.ini:13: [scenario.pend] steps: '2x5' is not a number"},
+      {"runs = 2", "runs = 0", "s.ini:4: [study] runs: must be >= 1"},
+      {"[noise.hand]", "[nosie.hand]", "s.ini:39: unknown section [nosie.hand]"},
+      {"q-diag = 1e-3,1e-2", "q-diag = 1e-3", "s.ini:40: [noise.hand] q-diag: expected 2 values"},
+      {"r = oracle", "r = tuned", "s.ini:37: [noise.oracle] r: 'tuned'"},
+      {"measurement = sin", "measurement = cos",
+       "s.ini:16: [scenario.pend] measurement: unknown measurement 'cos'"},
+      {"seed = 7", "seed = 7\nseed = 8", "s.ini:4: key 'seed' given twice in [study]"},
+  };
+  for (const Case& c : cases) {
+    const std::string message = ParseError(Replace(good, c.from, c.to));
+    EXPECT_EQ(message.rfind(c.expect, 0), 0u) << "got: " << message << "\nexpected: " << c.expect;
+  }
+  if (FiltersAvailable()) {
+    EXPECT_EQ(ParseError(Replace(good, "alpha = 0.5", "alpha = abc"))
+                  .rfind("s.ini:27: [filter.ukf] alpha: 'abc' is not a number", 0),
+              0u)
+        << ParseError(Replace(good, "alpha = 0.5", "alpha = abc"));
+    EXPECT_EQ(ParseError(Replace(good, "particles = 100", "particles = 0"))
+                  .rfind("s.ini:32: [filter.pf] particles: must be >= 1", 0),
+              0u)
+        << ParseError(Replace(good, "particles = 100", "particles = 0"));
+  }
+}
+
+TEST(StudyConfig, OracleRNeedsMeasurementNoise) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const std::string message =
+      ParseError(Replace(TinyStudy(2), "meas-noise-var = 0.01", "meas-noise-var = 0"));
+  EXPECT_NE(message.find("s.ini:37: [noise.oracle] r: the oracle R of [scenario.pend] is singular"),
+            std::string::npos)
+      << message;
+}
+
+// The truth's white-acceleration covariance pairs states (0,1), (2,3), ...;
+// the filters use each model's own (position, rate) pairs. They must agree.
+TEST(StudyConfig, WhiteAccelPairsMatchEveryModel) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  for (const ModelEntry* model : AllModels()) {
+    const int n = int(model->states.size());
+    const MeasurementDesc& meas = model->measurements[0];
+    FilterSpec spec;
+    spec.params = model->ResolveParams({});
+    spec.measurement = meas.name;
+    spec.kind = FilterKind::kEkf;
+    spec.transition.integrator = Integrator::kRk4;
+    spec.x0.assign(n, 0.1);
+    spec.p0.assign(n * n, 0.0);
+    for (int i = 0; i < n; ++i) spec.p0[i * n + i] = 1.0;
+    spec.q_white_accel = true;
+    spec.qc = 2.0;
+    const int m = int(meas.outputs.size());
+    spec.r.assign(m * m, 0.0);
+    for (int j = 0; j < m; ++j) spec.r[j * m + j] = 1.0;
+    FilterData data;
+    data.t = {0.0, 0.2};
+    data.lines = {1, 2};
+    data.m = m;
+    data.z.assign(2 * m, 0.1);
+    const FilterRunOutput out = model->run_filter(spec, data);
+    ASSERT_EQ(out.summary.final_q.size(), size_t(n * n)) << model->name;
+    const std::vector<double> ours = WhiteAccelCovariance(n, 2.0, 0.2);
+    for (int k = 0; k < n * n; ++k)
+      EXPECT_NEAR(out.summary.final_q[k], ours[k], 1e-15) << model->name << " entry " << k;
+  }
+}
+
+TEST(StudyStats, MatchHandComputedValues) {
+  // 1..5: mean 3, sample variance 2.5, percentiles by linear interpolation.
+  const MetricStats s = ComputeStats({5, 1, 4, 2, 3, std::nan("")});
+  EXPECT_EQ(s.n, 5);
+  EXPECT_DOUBLE_EQ(s.mean, 3.0);
+  EXPECT_DOUBLE_EQ(s.var, 2.5);
+  EXPECT_DOUBLE_EQ(s.std, std::sqrt(2.5));
+  EXPECT_DOUBLE_EQ(s.ci95_lo, 3.0 - 1.96 * std::sqrt(2.5) / std::sqrt(5.0));
+  EXPECT_DOUBLE_EQ(s.median, 3.0);
+  EXPECT_DOUBLE_EQ(s.p2_5, 1.0 + 0.025 * 4 * 1.0);  // h = 0.1 between 1 and 2
+  EXPECT_DOUBLE_EQ(s.p97_5, 4.9);
+  EXPECT_DOUBLE_EQ(s.min, 1.0);
+  EXPECT_DOUBLE_EQ(s.max, 5.0);
+  const MetricStats empty = ComputeStats({});
+  EXPECT_EQ(empty.n, 0);
+  EXPECT_TRUE(std::isnan(empty.mean));
+}
+
+}  // namespace
+}  // namespace estlab
