@@ -93,7 +93,7 @@ void RequireNonNegative(const std::vector<double>& v, const std::string& option)
   for (size_t i = 0; i < v.size(); ++i) {
     if (v[i] < 0) {
       throw InputError(option + ": variance " + std::to_string(i + 1) + " is negative (" +
-                       std::to_string(v[i]) + ")");
+                       FormatNumber(v[i]) + ")");
     }
   }
 }

@@ -41,7 +41,7 @@ inline void CheckConstraint(const std::string& model, const char* name, double v
   if (ok && c == Constraint::kNonNegative) ok = value >= 0;
   if (!ok) {
     throw InputError("parameter '" + std::string(name) + "' of model '" + model + "' must be " +
-                     ConstraintText(c) + ", got " + std::to_string(value));
+                     ConstraintText(c) + ", got " + FormatNumber(value));
   }
 }
 
