@@ -14,6 +14,7 @@ int RunFilterCommand(const std::vector<std::string>& args);
 int RunStudyCommand(const std::vector<std::string>& args);
 int RunMerge(const std::vector<std::string>& args);
 int RunFigures(const std::vector<std::string>& args);
+int RunTune(const std::vector<std::string>& args);
 
 
 }  // namespace estlab::cli

@@ -25,6 +25,8 @@ const std::vector<Command>& Commands() {
        estlab::cli::RunSimulate},
       {"filter", "run KF, EKF/IEKF, UKF/CKF/GHKF (optionally adaptive) or PF over a data CSV",
        estlab::cli::RunFilterCommand},
+      {"tune", "tune Q and R by maximum innovation likelihood (Ceres), validate",
+       estlab::cli::RunTune},
       {"study", "run a Monte Carlo study from a config file", estlab::cli::RunStudyCommand},
       {"merge", "join the result folders of a sharded study", estlab::cli::RunMerge},
       {"figures", "draw a study's figures with gnuplot", estlab::cli::RunFigures},

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "adaptive/tuner.h"
 #include "src/core/params.h"
 #include "src/ode/transition.h"
 #include "src/run/filter_spec.h"
@@ -83,6 +84,9 @@ struct ModelEntry {
 
   SimulationResult (*simulate)(const SimulationSpec&) = nullptr;
   FilterRunOutput (*run_filter)(const FilterSpec&, const FilterData&) = nullptr;
+  // Q/R tuning by maximum innovation likelihood (adaptive/tuner.h).
+  TuneResult (*tune)(const FilterSpec&, const TunerOptions&, const std::vector<FilterData>&) =
+      nullptr;
 
   // Defaults with "name=value" overrides applied and validated; throws
   // InputError naming an unknown or invalid parameter.

@@ -1,0 +1,86 @@
+#include "adaptive/tuner.h"
+
+#include <cmath>
+
+#include "src/core/types.h"
+
+namespace estlab {
+
+NoiseParam ParseNoiseParam(const std::string& name, const std::string& option) {
+  if (name == "diag") return NoiseParam::kDiag;
+  if (name == "full") return NoiseParam::kFull;
+  if (name == "white-accel") return NoiseParam::kWhiteAccel;
+  if (name == "scalar") return NoiseParam::kScalar;
+  if (name == "fixed") return NoiseParam::kFixed;
+  throw InputError(option + ": unknown parameterisation '" + name +
+                   "' (expected diag, full, white-accel, scalar or fixed)");
+}
+
+const char* NoiseParamName(NoiseParam param) {
+  switch (param) {
+    case NoiseParam::kDiag:
+      return "diag";
+    case NoiseParam::kFull:
+      return "full";
+    case NoiseParam::kWhiteAccel:
+      return "white-accel";
+    case NoiseParam::kScalar:
+      return "scalar";
+    case NoiseParam::kFixed:
+      return "fixed";
+  }
+  return "?";
+}
+
+TunerForm ParseTunerForm(const std::string& name) {
+  if (name == "lbfgs") return TunerForm::kLbfgs;
+  if (name == "least-squares") return TunerForm::kLeastSquares;
+  throw InputError("--form: unknown form '" + name + "' (expected lbfgs or least-squares)");
+}
+
+const char* TunerFormName(TunerForm form) {
+  return form == TunerForm::kLbfgs ? "lbfgs" : "least-squares";
+}
+
+const char* TuneStatusName(TuneStatus status) {
+  switch (status) {
+    case TuneStatus::kConverged:
+      return "converged";
+    case TuneStatus::kNoConvergence:
+      return "no-convergence";
+    case TuneStatus::kAllStartsFailed:
+      return "all-starts-diverged";
+  }
+  return "?";
+}
+
+bool TunerOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (burn_in < 0) return fail("burn-in must be >= 0, got " + std::to_string(burn_in));
+  if (starts < 1) return fail("starts must be >= 1, got " + std::to_string(starts));
+  if (!(start_spread >= 0 && std::isfinite(start_spread)))
+    return fail("start spread must be finite and >= 0, got " + FormatNumber(start_spread));
+  if (!(bound_width > 0)) return fail("bound width must be > 0, got " + FormatNumber(bound_width));
+  if (max_iterations < 1) return fail("max iterations must be >= 1");
+  if (!(function_tolerance >= 0 && gradient_tolerance >= 0 && parameter_tolerance >= 0))
+    return fail("tolerances must be >= 0");
+  if (!(hessian_step > 0 && hessian_step < 1))
+    return fail("hessian step must be in (0, 1), got " + FormatNumber(hessian_step));
+  if (!(log_det_margin > 0)) return fail("log-det margin must be > 0");
+  if (r_param == NoiseParam::kWhiteAccel)
+    return fail("white-accel applies to the process noise Q only, not to R");
+  for (double v : log_lower)
+    if (std::isnan(v)) return fail("a lower bound is NaN");
+  for (double v : log_upper)
+    if (std::isnan(v)) return fail("an upper bound is NaN");
+  if (log_lower.size() == 1 && log_upper.size() == 1 && log_lower[0] > log_upper[0]) {
+    return fail("lower bound " + FormatNumber(log_lower[0]) + " is above upper bound " +
+                FormatNumber(log_upper[0]));
+  }
+  return true;
+}
+
+}  // namespace estlab

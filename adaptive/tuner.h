@@ -1,0 +1,172 @@
+// Offline tuning of the process- and measurement-noise covariances Q and R by
+// maximum innovation likelihood (the "LikelihoodTuner"), in plain runtime
+// types so that the registry and the CLI can include this header cheaply.
+// The templates are in adaptive/likelihood.h and adaptive/tuner_impl.h.
+//
+//   NLL(theta) = 1/2 sum_datasets sum_{k >= burn_in} [ log det S_k
+//                + nu_k^T S_k^-1 nu_k + m log 2 pi ]
+//
+// with nu_k, S_k the innovations and their covariances of an EKF or a
+// sigma-point filter (UKF, CKF) run with Q(theta), R(theta) over fixed-step
+// (Euler, semi-implicit Euler, RK4) transitions. theta holds log-variances,
+// so every Q(theta), R(theta) is positive (semi-)definite by construction.
+//
+// Usage:
+//   FilterSpec spec = ...;                // the filter and the initial Q, R
+//   TunerOptions options;
+//   options.q_param = NoiseParam::kWhiteAccel;
+//   options.r_param = NoiseParam::kDiag;
+//   options.starts = 4;
+//   std::vector<FilterData> data = {LoadFilterData(...), ...};
+//   TuneResult result = FindModel("pendulum").tune(spec, options, data);
+//   if (result.IsSolutionUsable()) use(result.q, result.r);
+//
+// Parameterisations (chosen separately for Q and R), theta per matrix:
+//   diag         theta_i = log D_ii                         (n parameters)
+//   full         log-Cholesky: D = L L^T, theta = [log L_00^2, L_10,
+//                log L_11^2, L_20, L_21, log L_22^2, ...]   (n(n+1)/2)
+//   white-accel  theta = log qc, Q = qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] on
+//                every (position, rate) pair, dt of each step (Q only)  (1)
+//   scalar       theta = log s, D = s I                     (1)
+//   fixed        not tuned: the initial matrix              (0)
+// The diagonal entries of `full` are log L_ii^2 (not log L_ii) so that they
+// are log-variances like `diag` and the same bounds and spread apply.
+//
+// WARNING: the standard errors come from the curvature of the NLL at the
+// optimum (the inverse observed Fisher information). They are meaningful only
+// when the optimum is interior and the model is right; a parameter at a bound
+// or with a flat likelihood is reported with a large or infinite SE.
+#ifndef ESTLAB_ADAPTIVE_TUNER_H_
+#define ESTLAB_ADAPTIVE_TUNER_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "src/run/filter_spec.h"
+
+namespace estlab {
+
+enum class NoiseParam { kDiag, kFull, kWhiteAccel, kScalar, kFixed };
+// Parses diag | full | white-accel | scalar | fixed; throws InputError.
+NoiseParam ParseNoiseParam(const std::string& name, const std::string& option);
+const char* NoiseParamName(NoiseParam param);
+
+enum class TunerForm {
+  kLbfgs,         // ceres::GradientProblemSolver, L-BFGS on the NLL
+  kLeastSquares,  // ceres::Solver, Levenberg-Marquardt on whitened residuals
+};
+TunerForm ParseTunerForm(const std::string& name);
+const char* TunerFormName(TunerForm form);
+
+struct TunerOptions {
+  NoiseParam q_param = NoiseParam::kDiag;
+  NoiseParam r_param = NoiseParam::kDiag;
+  TunerForm form = TunerForm::kLbfgs;
+
+  // Updates skipped at the start of every dataset (the prior's transient).
+  int burn_in = 0;
+
+  // Multi-start: start 0 is the initial guess; starts 1..starts-1 are a
+  // Latin hypercube in [theta0 - spread, theta0 + spread] on the log
+  // parameters (off-diagonal Cholesky entries keep their initial value),
+  // drawn from Rng(seed).
+  int starts = 1;
+  double start_spread = 2.0;
+  uint64_t seed = 1;
+
+  // Bounds on the log parameters. Empty: theta0 +- bound_width (e^20 ~ 5e8
+  // in variance). One value: the same for every log parameter. Otherwise one
+  // per parameter (off-diagonal Cholesky entries included; use +-inf for no
+  // bound). Off-diagonal Cholesky entries are unbounded by default.
+  double bound_width = 20.0;
+  std::vector<double> log_lower, log_upper;
+
+  int max_iterations = 200;
+  double function_tolerance = 1e-12;  // relative change of the NLL
+  double gradient_tolerance = 1e-8;   // max-norm of the gradient (L-BFGS)
+  double parameter_tolerance = 1e-10;
+
+  // Standard errors: Hessian by central differences of the exact gradient
+  // with this step in theta.
+  bool compute_std_errors = true;
+  double hessian_step = 1e-4;
+  // A log parameter whose SE exceeds this is "poorly identified".
+  double poorly_identified_se = 1.0;
+
+  // The least-squares form's log-determinant residual sqrt(log det S_k + c):
+  // c = log_det_margin * m - min_k log det S_k at the start point (>= 0).
+  double log_det_margin = 10.0;
+
+  bool IsValid(std::string* error) const;
+};
+
+enum class TuneStatus {
+  kConverged,        // Ceres reported convergence
+  kNoConvergence,    // iteration limit or line-search trouble; best point kept
+  kAllStartsFailed,  // the filter failed (diverged) at every start point
+};
+const char* TuneStatusName(TuneStatus status);
+
+// One start of the multi-start.
+struct TuneStart {
+  std::vector<double> theta_start, theta_end;
+  double nll_start = 0.0, nll_end = 0.0;  // +inf when the filter failed
+  int iterations = 0;
+  bool ok = false;
+  std::string termination;
+};
+
+struct TuneResult {
+  TuneStatus status = TuneStatus::kAllStartsFailed;
+  std::string message;
+  std::string form;  // "lbfgs" | "least-squares": what was used
+
+  // The log parameters: names ("log q_theta", "log qc", "log r_sin_theta",
+  // "L_q(omega,theta)", ...), values at the initial guess and the optimum,
+  // standard errors (+inf when the Hessian is not positive definite) and the
+  // "poorly identified by this data" flags (SE > poorly_identified_se for log
+  // parameters; for an off-diagonal Cholesky entry L_ij, SE > sqrt(D_ii)).
+  std::vector<std::string> names;
+  std::vector<bool> is_log;
+  std::vector<double> theta_initial, theta;
+  std::vector<double> std_errors;
+  std::vector<bool> poorly_identified;
+  std::vector<bool> at_bound;
+  bool hessian_positive_definite = false;
+
+  // Tuned noise. Q and R row-major (n x n, m x m); for white-accel Q is
+  // qc * Q_wa(dt_ref) at the median step dt_ref of the first dataset.
+  NoiseParam q_param = NoiseParam::kDiag, r_param = NoiseParam::kDiag;
+  bool q_white_accel = false;
+  double qc = 0.0;
+  double dt_ref = 0.0;
+  std::vector<double> q, r;
+  // The tuned filter spec: the input spec with q / qc / r replaced.
+  FilterSpec tuned_spec;
+
+  double nll_initial = 0.0;  // at the initial guess (+inf if the filter failed)
+  double nll_tuned = 0.0;
+  long updates = 0;  // innovations in the NLL (after burn-in)
+  int iterations = 0;
+  std::string termination;  // Ceres' message for the best start
+  double wall_s = 0.0;
+  std::vector<TuneStart> starts;
+  int best_start = -1;
+
+  bool IsSolutionUsable() const { return status != TuneStatus::kAllStartsFailed; }
+};
+
+// Tunes the noise of `spec` (its q / qc / r are the initial guess) on the
+// datasets. Throws InputError for bad input (unsupported filter or
+// integrator, dataset shorter than burn-in, an all-missing measurement
+// column, bounds, wrong parameterisation). A failing filter is a status.
+// Defined in adaptive/tuner_impl.h, instantiated per model in
+// adaptive/tune_<model>.cpp, reached through ModelEntry::tune.
+template <class Model>
+TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
+                     const std::vector<FilterData>& datasets);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_ADAPTIVE_TUNER_H_

@@ -1,0 +1,521 @@
+// The likelihood tuner: Ceres on the innovation NLL of adaptive/likelihood.h,
+// multi-start, bounds, standard errors. Include only from the per-model
+// instantiation units adaptive/tune_<model>.cpp and from tests; everything
+// else reaches it through ModelEntry::tune (adaptive/tuner.h).
+//
+// Usage (what ModelEntry::tune does):
+//   TuneResult r = TuneWith<models::Pendulum, models::Pendulum::Sin>(spec, options, data);
+//
+// Gradients. The L-BFGS form (ceres::GradientProblemSolver) gets the exact
+// gradient of the NLL by forward-mode AD: the recursion runs on
+// ceres::Jet<double, C> with C = 2 (K <= 2) or 8 directions per pass; more
+// than 8 parameters are done in ceil(K / 8) passes (chunking, as
+// ceres::DynamicAutoDiffCostFunction does), so only two Jet sizes are
+// instantiated per model and measurement (compile time on 2 cores). The EKF's Jacobians of the
+// fixed-step map need second derivatives for that and use NestedJet (adaptive/nested_jet.h).
+//
+// The least-squares form (Levenberg-Marquardt, ceres::Solver with bounds)
+// minimises 1/2 sum r^2 over the residuals
+//   e_k = L_k^-1 nu_k   (m per update)   and   sqrt(log det S_k + c)  (one per update),
+// which is NLL + const. c = log_det_margin * m - min_k log det S_k at the
+// start point, kept while that start runs; a trial point where
+// log det S_k + c <= 0 is infeasible. Its Jacobian uses the same chunked Jets.
+//
+// Infeasible points. Evaluate() returns false (Ceres backs off) when the
+// filter fails (Cholesky failure, non-finite value, trace(P) too large).
+// Bounds: the least-squares form has native bounds; for L-BFGS
+// (GradientProblemSolver has none) the NLL is continued outside the box by a
+// C^1 linear-plus-quadratic penalty and the result clamped (NllFunction). A
+// parameter that ends on a bound is flagged at_bound.
+//
+// Standard errors: H = central differences of the exact gradient at the
+// optimum (step options.hessian_step), symmetrised; cov = H^-1 by Cholesky
+// solve; SE_i = sqrt(cov_ii), +inf for all when H is not positive definite.
+#ifndef ESTLAB_ADAPTIVE_TUNER_IMPL_H_
+#define ESTLAB_ADAPTIVE_TUNER_IMPL_H_
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "adaptive/likelihood.h"
+#include "adaptive/tuner.h"
+#include "src/core/random.h"
+
+namespace estlab {
+
+namespace tuner_internal {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// NLL and its gradient / the least-squares residuals and their Jacobian, by
+// chunked forward AD.
+template <class Model, class Meas>
+class Objective {
+ public:
+  static constexpr int kM = Meas::kDim;
+  explicit Objective(const InnovationLikelihood<Model, Meas>& likelihood)
+      : lik_(likelihood), k_(likelihood.NumParams()) {}
+
+  int NumParams() const { return k_; }
+  const InnovationLikelihood<Model, Meas>& likelihood() const { return lik_; }
+
+  bool Value(const double* theta, double* nll) const { return lik_.Nll(theta, nll); }
+
+  // NLL and gradient (gradient may be null).
+  bool ValueAndGradient(const double* theta, double* nll, double* gradient) const {
+    if (gradient == nullptr || k_ == 0) return Value(theta, nll);
+    bool ok;
+    if (k_ <= 2) {
+      ok = ChunkedGradient<2>(theta, nll, gradient);
+    } else {
+      ok = ChunkedGradient<8>(theta, nll, gradient);
+    }
+    if (!ok) return false;
+    for (int i = 0; i < k_; ++i)
+      if (!std::isfinite(gradient[i])) return false;
+    return std::isfinite(*nll);
+  }
+
+  long NumResiduals() const { return lik_.NumTerms() * (kM + 1); }
+
+  // The least-squares residuals; jacobian (row-major NumResiduals x K) may be
+  // null.
+  bool Residuals(const double* theta, double c, double* residuals, double* jacobian) const {
+    if (jacobian == nullptr || k_ == 0) return ResidualsT<double>(theta, c, residuals);
+    if (k_ <= 2) return ChunkedResiduals<2>(theta, c, residuals, jacobian);
+    return ChunkedResiduals<8>(theta, c, residuals, jacobian);
+  }
+
+  // min_k log det S_k at theta (for the constant c), false if the filter fails.
+  bool MinLogDet(const double* theta, double* min_log_det) const {
+    double lo = kInf;
+    const bool ok = lik_.template Run<double>(
+        theta, [&](const Vec<double, kM>&, const double& ld) { lo = std::min(lo, ld); });
+    *min_log_det = lo;
+    return ok && std::isfinite(lo);
+  }
+
+ private:
+  template <int C>
+  std::vector<ceres::Jet<double, C>> Seed(const double* theta, int first) const {
+    std::vector<ceres::Jet<double, C>> th(k_);
+    for (int i = 0; i < k_; ++i) {
+      th[i] = ceres::Jet<double, C>(theta[i]);
+      if (i >= first && i < first + C) th[i].v[i - first] = 1.0;
+    }
+    return th;
+  }
+
+  template <int C>
+  bool ChunkedGradient(const double* theta, double* nll, double* gradient) const {
+    for (int first = 0; first < k_; first += C) {
+      const std::vector<ceres::Jet<double, C>> th = Seed<C>(theta, first);
+      ceres::Jet<double, C> f;
+      if (!lik_.Nll(th.data(), &f)) return false;
+      *nll = f.a;
+      for (int i = first; i < std::min(k_, first + C); ++i) gradient[i] = f.v[i - first];
+    }
+    return true;
+  }
+
+  template <class T>
+  bool ResidualsT(const T* theta, double c, T* residuals) const {
+    long at = 0;
+    bool positive = true;
+    const bool ok =
+        lik_.template Run<T>(theta, [&](const Eigen::Matrix<T, kM, 1>& e, const T& log_det) {
+          using std::sqrt;
+          for (int j = 0; j < kM; ++j) residuals[at++] = e(j);
+          const T arg = log_det + c;
+          if (!(ScalarPart(arg) > 0)) positive = false;
+          residuals[at++] = positive ? sqrt(arg) : T(0.0);
+        });
+    return ok && positive && at == NumResiduals();
+  }
+
+  template <int C>
+  bool ChunkedResiduals(const double* theta, double c, double* residuals, double* jacobian) const {
+    const long rows = NumResiduals();
+    std::vector<ceres::Jet<double, C>> r(rows);
+    for (int first = 0; first < k_; first += C) {
+      const std::vector<ceres::Jet<double, C>> th = Seed<C>(theta, first);
+      if (!ResidualsT<ceres::Jet<double, C>>(th.data(), c, r.data())) return false;
+      for (long row = 0; row < rows; ++row) {
+        residuals[row] = r[row].a;
+        for (int i = first; i < std::min(k_, first + C); ++i)
+          jacobian[row * k_ + i] = r[row].v[i - first];
+      }
+    }
+    for (long row = 0; row < rows; ++row)
+      if (!std::isfinite(residuals[row])) return false;
+    return true;
+  }
+
+  const InnovationLikelihood<Model, Meas>& lik_;
+  int k_;
+};
+
+// L-BFGS objective. GradientProblemSolver has no bounds, so outside the box
+// the NLL is continued C^1 from the nearest point theta_c = clamp(theta):
+//   f(theta) = NLL(theta_c) + g(theta_c)^T d + mu/2 |d|^2,  d = theta - theta_c,
+// whose minimiser lies at most |g| / mu outside the box; the result is then
+// clamped. (Treating the box as infeasible instead stalls the line search on
+// the first bound it meets.)
+template <class Model, class Meas>
+class NllFunction final : public ceres::FirstOrderFunction {
+ public:
+  static constexpr double kPenalty = 1e4;  // mu, NLL units per (log unit)^2
+  NllFunction(const Objective<Model, Meas>& objective, const std::vector<double>& lower,
+              const std::vector<double>& upper)
+      : objective_(objective), lower_(lower), upper_(upper) {}
+  bool Evaluate(const double* theta, double* cost, double* gradient) const override {
+    const int k = NumParameters();
+    std::vector<double> clamped(theta, theta + k);
+    bool inside = true;
+    for (int i = 0; i < k; ++i) {
+      clamped[i] = std::clamp(theta[i], lower_[i], upper_[i]);
+      inside = inside && clamped[i] == theta[i];
+    }
+    if (inside) return objective_.ValueAndGradient(theta, cost, gradient);
+    std::vector<double> g(k);
+    if (!objective_.ValueAndGradient(clamped.data(), cost, g.data())) return false;
+    for (int i = 0; i < k; ++i) {
+      const double d = theta[i] - clamped[i];
+      *cost += g[i] * d + 0.5 * kPenalty * d * d;
+      if (gradient != nullptr) gradient[i] = g[i] + kPenalty * d;
+    }
+    return true;
+  }
+  int NumParameters() const override { return objective_.NumParams(); }
+
+ private:
+  const Objective<Model, Meas>& objective_;
+  std::vector<double> lower_, upper_;
+};
+
+// Levenberg-Marquardt cost: whitened innovations and log-det residuals.
+template <class Model, class Meas>
+class LeastSquaresCost final : public ceres::CostFunction {
+ public:
+  LeastSquaresCost(const Objective<Model, Meas>& objective, double c)
+      : objective_(objective), c_(c) {
+    set_num_residuals(int(objective.NumResiduals()));
+    mutable_parameter_block_sizes()->push_back(objective.NumParams());
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    return objective_.Residuals(parameters[0], c_, residuals,
+                                jacobians != nullptr ? jacobians[0] : nullptr);
+  }
+
+ private:
+  const Objective<Model, Meas>& objective_;
+  double c_;
+};
+
+// Resolves the bounds (see TunerOptions); throws InputError.
+inline void ResolveBounds(const TunerOptions& o, const std::vector<double>& theta0,
+                          const std::vector<bool>& is_log, std::vector<double>* lower,
+                          std::vector<double>* upper) {
+  const size_t k = theta0.size();
+  auto pick = [&](const std::vector<double>& given, const char* which) {
+    if (!given.empty() && given.size() != 1 && given.size() != k) {
+      throw InputError(std::string(which) + " bounds: expected 1 or " + std::to_string(k) +
+                       " values (one per tuned parameter), got " + std::to_string(given.size()));
+    }
+  };
+  pick(o.log_lower, "lower");
+  pick(o.log_upper, "upper");
+  lower->assign(k, -kInf);
+  upper->assign(k, kInf);
+  for (size_t i = 0; i < k; ++i) {
+    if (o.log_lower.size() == k) {
+      (*lower)[i] = o.log_lower[i];
+    } else if (is_log[i]) {
+      (*lower)[i] = o.log_lower.size() == 1 ? o.log_lower[0] : theta0[i] - o.bound_width;
+    }
+    if (o.log_upper.size() == k) {
+      (*upper)[i] = o.log_upper[i];
+    } else if (is_log[i]) {
+      (*upper)[i] = o.log_upper.size() == 1 ? o.log_upper[0] : theta0[i] + o.bound_width;
+    }
+    if ((*lower)[i] > (*upper)[i]) {
+      throw InputError("bounds of parameter " + std::to_string(i + 1) + ": lower " +
+                       FormatNumber((*lower)[i]) + " is above upper " + FormatNumber((*upper)[i]));
+    }
+  }
+}
+
+// Start points: theta0, then a Latin hypercube in theta0 +- spread on the log
+// parameters, clamped into the bounds.
+inline std::vector<std::vector<double>> StartPoints(const TunerOptions& o,
+                                                    const std::vector<double>& theta0,
+                                                    const std::vector<bool>& is_log,
+                                                    const std::vector<double>& lower,
+                                                    const std::vector<double>& upper) {
+  const int k = int(theta0.size());
+  std::vector<std::vector<double>> points(o.starts, theta0);
+  const int extra = o.starts - 1;
+  Rng rng(DeriveSeed({o.seed, uint64_t(k), 0x4c48u}));
+  for (int d = 0; d < k && extra > 0; ++d) {
+    std::vector<int> strata(extra);
+    std::iota(strata.begin(), strata.end(), 0);
+    for (int i = extra - 1; i > 0; --i) {  // Fisher-Yates
+      const int j = int(rng.Uniform() * (i + 1));
+      std::swap(strata[i], strata[std::min(j, i)]);
+    }
+    for (int s = 0; s < extra; ++s) {
+      const double u = (strata[s] + rng.Uniform()) / extra;
+      if (is_log[d]) points[s + 1][d] = theta0[d] - o.start_spread + 2.0 * o.start_spread * u;
+    }
+  }
+  for (auto& p : points)
+    for (int d = 0; d < k; ++d) p[d] = std::clamp(p[d], lower[d], upper[d]);
+  return points;
+}
+
+template <class Model, class Meas>
+TuneStart RunLbfgs(const Objective<Model, Meas>& objective, const TunerOptions& o,
+                   const std::vector<double>& lower, const std::vector<double>& upper,
+                   std::vector<double> theta, bool* converged) {
+  TuneStart start;
+  start.theta_start = theta;
+  ceres::GradientProblem problem(new NllFunction<Model, Meas>(objective, lower, upper));
+  ceres::GradientProblemSolver::Options so;
+  so.line_search_direction_type = ceres::LBFGS;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = o.function_tolerance;
+  so.gradient_tolerance = o.gradient_tolerance;
+  so.parameter_tolerance = o.parameter_tolerance;
+  so.logging_type = ceres::SILENT;
+  ceres::GradientProblemSolver::Summary summary;
+  ceres::Solve(so, problem, theta.data(), &summary);
+  for (size_t i = 0; i < theta.size(); ++i) theta[i] = std::clamp(theta[i], lower[i], upper[i]);
+  start.theta_end = theta;
+  start.termination = summary.message;
+  start.iterations = summary.iterations.empty() ? 0 : int(summary.iterations.size()) - 1;
+  start.nll_start = summary.initial_cost;
+  start.ok = summary.IsSolutionUsable() && objective.Value(theta.data(), &start.nll_end) &&
+             std::isfinite(start.nll_end);
+  if (!start.ok) start.nll_end = kInf;
+  *converged = summary.termination_type == ceres::CONVERGENCE;
+  return start;
+}
+
+template <class Model, class Meas>
+TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOptions& o,
+                          const std::vector<double>& lower, const std::vector<double>& upper,
+                          std::vector<double> theta, int num_meas, bool* converged) {
+  TuneStart start;
+  start.theta_start = theta;
+  *converged = false;
+  double min_log_det = 0.0;
+  if (!objective.MinLogDet(theta.data(), &min_log_det) ||
+      !objective.Value(theta.data(), &start.nll_start)) {
+    start.nll_start = start.nll_end = kInf;
+    start.theta_end = theta;
+    start.termination = "the filter failed at the start point";
+    return start;
+  }
+  const double c = std::max(0.0, o.log_det_margin * num_meas - min_log_det);
+  ceres::Problem problem;
+  problem.AddResidualBlock(new LeastSquaresCost<Model, Meas>(objective, c), nullptr, theta.data());
+  for (int i = 0; i < objective.NumParams(); ++i) {
+    if (std::isfinite(lower[i])) problem.SetParameterLowerBound(theta.data(), i, lower[i]);
+    if (std::isfinite(upper[i])) problem.SetParameterUpperBound(theta.data(), i, upper[i]);
+  }
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = o.function_tolerance;
+  so.gradient_tolerance = o.gradient_tolerance;
+  so.parameter_tolerance = o.parameter_tolerance;
+  so.logging_type = ceres::SILENT;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  start.theta_end = theta;
+  start.termination = summary.message;
+  start.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  start.ok = summary.IsSolutionUsable() && objective.Value(theta.data(), &start.nll_end) &&
+             std::isfinite(start.nll_end);
+  if (!start.ok) start.nll_end = kInf;
+  *converged = summary.termination_type == ceres::CONVERGENCE;
+  return start;
+}
+
+// Standard errors from the curvature; false when H is not positive definite.
+template <class Model, class Meas>
+bool StandardErrors(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
+                    double step, std::vector<double>* se) {
+  const int k = objective.NumParams();
+  se->assign(k, kInf);
+  if (k == 0) return true;
+  Eigen::MatrixXd H(k, k);
+  std::vector<double> plus(k), minus(k), x(theta);
+  double f = 0.0;
+  for (int i = 0; i < k; ++i) {
+    x[i] = theta[i] + step;
+    if (!objective.ValueAndGradient(x.data(), &f, plus.data())) return false;
+    x[i] = theta[i] - step;
+    if (!objective.ValueAndGradient(x.data(), &f, minus.data())) return false;
+    x[i] = theta[i];
+    for (int j = 0; j < k; ++j) H(i, j) = (plus[j] - minus[j]) / (2.0 * step);
+  }
+  const Eigen::MatrixXd Hs = 0.5 * (H + H.transpose());
+  if (!Hs.allFinite()) return false;
+  const Eigen::LLT<Eigen::MatrixXd> llt(Hs);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(k, k));
+  for (int i = 0; i < k; ++i) {
+    if (!(cov(i, i) > 0)) return false;
+    (*se)[i] = std::sqrt(cov(i, i));
+  }
+  return true;
+}
+
+}  // namespace tuner_internal
+
+template <class Model, class Meas>
+TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
+                    const std::vector<FilterData>& datasets) {
+  using namespace tuner_internal;
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const auto clock_start = std::chrono::steady_clock::now();
+  const InnovationLikelihood<Model, Meas> lik(spec, options, datasets);
+  const Objective<Model, Meas> objective(lik);
+  const int k = lik.NumParams();
+
+  TuneResult result;
+  result.form = TunerFormName(options.form);
+  result.names = lik.ParamNames();
+  result.is_log = lik.ParamIsLog();
+  result.theta_initial = lik.InitialTheta();
+  result.q_param = options.q_param;
+  result.r_param = options.r_param;
+  result.dt_ref = lik.dt_ref();
+  result.updates = lik.NumTerms();
+  std::vector<double> lower, upper;
+  ResolveBounds(options, result.theta_initial, result.is_log, &lower, &upper);
+  if (!lik.Nll(result.theta_initial.data(), &result.nll_initial) ||
+      !std::isfinite(result.nll_initial))
+    result.nll_initial = kInf;
+
+  // Multi-start.
+  const auto points = StartPoints(options, result.theta_initial, result.is_log, lower, upper);
+  std::vector<bool> converged(points.size(), false);
+  for (size_t s = 0; s < points.size(); ++s) {
+    bool conv = false;
+    if (k == 0) {
+      TuneStart st;
+      st.theta_start = st.theta_end = points[s];
+      st.ok = std::isfinite(result.nll_initial);
+      st.nll_start = st.nll_end = result.nll_initial;
+      st.termination = "nothing to tune (Q and R fixed)";
+      conv = st.ok;
+      result.starts.push_back(st);
+    } else if (options.form == TunerForm::kLbfgs) {
+      result.starts.push_back(RunLbfgs(objective, options, lower, upper, points[s], &conv));
+    } else {
+      result.starts.push_back(
+          RunLeastSquares(objective, options, lower, upper, points[s], M, &conv));
+    }
+    converged[s] = conv;
+    const TuneStart& st = result.starts.back();
+    if (st.ok && (result.best_start < 0 || st.nll_end < result.starts[result.best_start].nll_end))
+      result.best_start = int(s);
+  }
+
+  auto finish = [&]() {
+    result.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return result;
+  };
+  if (result.best_start < 0) {
+    result.status = TuneStatus::kAllStartsFailed;
+    result.message = "the filter diverged at every one of the " + std::to_string(points.size()) +
+                     " start points (" + result.starts.front().termination + ")";
+    result.nll_tuned = kInf;
+    return finish();
+  }
+  const TuneStart& best = result.starts[result.best_start];
+  result.status =
+      converged[result.best_start] ? TuneStatus::kConverged : TuneStatus::kNoConvergence;
+  result.theta = best.theta_end;
+  result.nll_tuned = best.nll_end;
+  result.iterations = best.iterations;
+  result.termination = best.termination;
+  int failed = 0;
+  for (const auto& st : result.starts) failed += !st.ok;
+  result.message = "best of " + std::to_string(result.starts.size()) + " start(s): start " +
+                   std::to_string(result.best_start) +
+                   (failed ? " (" + std::to_string(failed) + " diverged)" : "");
+
+  // Tuned matrices.
+  const double* theta_q = result.theta.data();
+  const double* theta_r = result.theta.data() + lik.q_param().NumParams();
+  const Mat<N, N> Q = lik.q_param().template Matrix<double>(theta_q, result.dt_ref);
+  const Mat<M, M> R = lik.r_param().template Matrix<double>(theta_r, 0.0);
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) result.q.push_back(Q(i, j));
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) result.r.push_back(R(i, j));
+  result.q_white_accel = lik.q_param().IsWhiteAccel();
+  result.qc = lik.q_param().Qc(theta_q);
+  result.tuned_spec = spec;
+  result.tuned_spec.q_white_accel = result.q_white_accel;
+  result.tuned_spec.qc = result.qc;
+  result.tuned_spec.q = result.q_white_accel ? std::vector<double>{} : result.q;
+  result.tuned_spec.r = result.r;
+
+  // Standard errors and identifiability.
+  if (options.compute_std_errors) {
+    result.hessian_positive_definite =
+        StandardErrors(objective, result.theta, options.hessian_step, &result.std_errors);
+  } else {
+    result.std_errors.assign(k, kInf);
+  }
+  std::vector<int> off_row = lik.q_param().OffDiagonalRow();
+  for (int row : lik.r_param().OffDiagonalRow()) off_row.push_back(row);
+  for (int i = 0; i < k; ++i) {
+    double limit = options.poorly_identified_se;
+    if (off_row[i] >= 0) {
+      const bool in_q = i < lik.q_param().NumParams();
+      limit = std::sqrt(in_q ? Q(off_row[i], off_row[i]) : R(off_row[i], off_row[i]));
+    }
+    result.poorly_identified.push_back(!(result.std_errors[i] <= limit));
+    const double tol = 1e-6 * std::max(1.0, std::abs(result.theta[i]));
+    result.at_bound.push_back(std::abs(result.theta[i] - lower[i]) <= tol ||
+                              std::abs(result.theta[i] - upper[i]) <= tol);
+  }
+  return finish();
+}
+
+// Dispatches on the measurement name.
+template <class Model>
+TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
+                     const std::vector<FilterData>& datasets) {
+  TuneResult result;
+  const bool found = VisitMeasurement<Model>(spec.measurement, [&](auto m) {
+    result = TuneWith<Model, decltype(m)>(spec, options, datasets);
+  });
+  if (!found) {
+    throw InputError("unknown measurement '" + spec.measurement + "' for model '" +
+                     std::string(Model::kName) + "'");
+  }
+  return result;
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_ADAPTIVE_TUNER_IMPL_H_

@@ -1,0 +1,492 @@
+// estlab tune: tune Q and R by maximum innovation likelihood (Ceres), then
+// optionally compare initial, tuned and true noise on a validation file.
+#include <boost/program_options.hpp>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <optional>
+#include <sstream>
+
+#include "src/cli/args.h"
+#include "src/cli/commands.h"
+#include "src/cli/filter_options.h"
+#include "src/io/json.h"
+#include "src/io/output_file.h"
+#include "src/registry/registry.h"
+
+namespace po = boost::program_options;
+
+namespace estlab::cli {
+
+namespace {
+
+constexpr const char* kExamples = R"(Examples:
+  # Simulate training and validation data (white-noise acceleration is the
+  # filter's model; the simulator adds diagonal process noise per step):
+  estlab simulate --model pendulum --x0 theta=0.785398 --t-end 20 --dt 0.01 --integrator rk4 \
+      --process-noise-var 1e-6,1e-4 --measure sin --meas-noise-var 0.01 --seed 1 --out train.csv
+  estlab simulate --model pendulum --x0 theta=0.785398 --t-end 20 --dt 0.01 --integrator rk4 \
+      --process-noise-var 1e-6,1e-4 --measure sin --meas-noise-var 0.01 --seed 2 --out valid.csv
+  # Tune a diagonal Q and R of the EKF from guesses 100x off, validate:
+  estlab tune --model pendulum --measure sin --filter ekf --integrator rk4 --data train.csv \
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --init-q-diag 1e-4,1e-2 --init-r-diag 1 \
+      --validate valid.csv --out tuned.ini
+  # then filter with the tuned noise:
+  estlab filter --model pendulum --measure sin --filter ekf --integrator rk4 --data valid.csv \
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 $(sed -n 's/^\([a-z-]*\) = \(.*\)/--\1 \2/p' tuned.ini) \
+      --out est.csv
+  # White-noise-acceleration qc and a scalar R, UKF, 4 starts, least squares, JSON:
+  estlab tune --model double-pendulum --measure angles --filter ukf --alpha 1 --data a.csv \
+      --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
+      --init-r-scalar 0.01 --starts 4 --burn-in 20 --form least-squares --json
+
+Tuning: minimises NLL = 1/2 sum_k [log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi]
+over the innovations nu_k (covariance S_k) of every dataset after --burn-in
+updates. Parameters are log-variances (diag, scalar, white-accel's log qc) or
+a log-Cholesky factor (full); --q-param/--r-param default to the shape of the
+--init-* option given (q-white-accel -> white-accel, q -> full, q-scalar ->
+scalar, q-diag -> diag). 'fixed' keeps the initial matrix. The EKF, IEKF, UKF,
+CKF and GHKF are supported, with a fixed-step --integrator (not cvodes).
+
+Bounds: each log parameter within its initial value +- --bound-width (20),
+or within --log-lower .. --log-upper (one value for all, or one per
+parameter). Multi-start: start 1 is the initial guess, the others a Latin
+hypercube within +- --start-spread (2) of it, drawn from --seed.
+
+Output: a table (or --json) with the tuned Q and R, the NLL before and after,
+Ceres' termination, and the standard error of every log parameter from the
+curvature of the NLL; a parameter with SE > 1 is 'poorly identified by this
+data'. --out writes the tuned noise as 'q-diag = ...' / 'q = ...' /
+'q-white-accel = ...' and 'r-diag = ...' / 'r = ...' lines, the option names of
+'estlab filter'. --validate runs the filter on another file with the initial,
+the tuned and (from <file>.json written by 'estlab simulate', or
+--true-q-diag/--true-r-diag) the true noise. Exit status 1, and no --out file,
+when the filter diverges at every start.
+)";
+
+// The numbers of "key": [a, b, ...] in a JSON text (null -> NaN); false when
+// the key is absent.
+bool JsonNumberArray(const std::string& text, const std::string& key, std::vector<double>* out) {
+  const size_t at = text.find("\"" + key + "\"");
+  if (at == std::string::npos) return false;
+  size_t i = text.find(':', at);
+  if (i == std::string::npos) return false;
+  i = text.find_first_not_of(" \t\r\n", i + 1);
+  if (i == std::string::npos || text[i] != '[') return false;
+  const size_t end = text.find(']', i);
+  if (end == std::string::npos) return false;
+  out->clear();
+  std::stringstream items(text.substr(i + 1, end - i - 1));
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const size_t b = item.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos) continue;
+    const std::string v = item.substr(b, item.find_last_not_of(" \t\r\n") - b + 1);
+    out->push_back(v == "null" ? std::nan("") : ParseNumber(v, key));
+  }
+  return true;
+}
+
+// --init-q-scalar s -> --init-q-diag s,s,...  (so BuildFilterSpec sees it).
+void ExpandScalarOption(po::variables_map* vm, const std::string& scalar_opt,
+                        const std::string& diag_opt, const std::vector<std::string>& others,
+                        int n) {
+  if (!vm->count(scalar_opt)) return;
+  for (const auto& o : others) {
+    if (vm->count(o)) throw InputError("give only one of --" + scalar_opt + " and --" + o);
+  }
+  const double s = ParseNumber((*vm)[scalar_opt].as<std::string>(), "--" + scalar_opt);
+  if (!(s > 0)) throw InputError("--" + scalar_opt + " must be > 0");
+  std::string diag;
+  for (int i = 0; i < n; ++i) {
+    if (i) diag += ',';
+    diag += FormatDouble(s);
+  }
+  vm->insert({diag_opt, po::variable_value(boost::any(diag), false)});
+}
+
+NoiseParam DefaultParam(const po::variables_map& vm, const std::string& which) {
+  if (vm.count("init-" + which + "-white-accel")) return NoiseParam::kWhiteAccel;
+  if (vm.count("init-" + which + "-scalar")) return NoiseParam::kScalar;
+  if (vm.count("init-" + which)) return NoiseParam::kFull;
+  return NoiseParam::kDiag;
+}
+
+bool IsDiagonal(const std::vector<double>& a, int n) {
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      if (i != j && a[i * n + j] != 0.0) return false;
+  return true;
+}
+
+std::string DiagText(const std::vector<double>& a, int n) {
+  std::string out;
+  for (int i = 0; i < n; ++i) {
+    if (i) out += ',';
+    out += FormatDouble(a[i * n + i]);
+  }
+  return out;
+}
+
+std::string MatrixText(const std::vector<double>& a, int n) {
+  std::string out;
+  for (int i = 0; i < n; ++i) {
+    if (i) out += ";";
+    for (int j = 0; j < n; ++j) {
+      if (j) out += ',';
+      out += FormatDouble(a[i * n + j]);
+    }
+  }
+  return out;
+}
+
+// The `estlab filter` option lines of a tuned covariance.
+std::string IniLine(const std::string& symbol, NoiseParam param, bool white_accel, double qc,
+                    const std::vector<double>& a, int n) {
+  if (white_accel) return symbol + "-white-accel = " + FormatDouble(qc) + "\n";
+  const bool diag = param == NoiseParam::kDiag || param == NoiseParam::kScalar ||
+                    (param == NoiseParam::kFixed && IsDiagonal(a, n));
+  if (diag) return symbol + "-diag = " + DiagText(a, n) + "\n";
+  return symbol + " = " + MatrixText(a, n) + "\n";
+}
+
+void WriteMatrix(JsonWriter* j, const std::vector<double>& a, int n) {
+  j->BeginArray();
+  for (int i = 0; i < n; ++i)
+    j->Value(std::vector<double>(a.begin() + i * n, a.begin() + (i + 1) * n));
+  j->EndArray();
+}
+
+// {"qc": ..} | {"diag": [..]} | {"scalar": ..} | {"matrix": [[..]]}, plus "param".
+void WriteTuned(JsonWriter* j, NoiseParam param, bool white_accel, double qc,
+                const std::vector<double>& a, int n) {
+  j->BeginObject().Key("param").Value(NoiseParamName(param));
+  if (white_accel) {
+    j->Key("qc").Value(qc);
+  } else if (param == NoiseParam::kScalar) {
+    j->Key("scalar").Value(a[0]);
+  } else if (param == NoiseParam::kDiag || (param == NoiseParam::kFixed && IsDiagonal(a, n))) {
+    std::vector<double> d;
+    for (int i = 0; i < n; ++i) d.push_back(a[i * n + i]);
+    j->Key("diag").Value(d);
+  } else {
+    j->Key("matrix");
+    WriteMatrix(j, a, n);
+  }
+  j->EndObject();
+}
+
+void WriteSummary(JsonWriter* j, const FilterSummary& s) {
+  j->BeginObject().Key("status").Value(s.status);
+  if (!s.ok) j->Key("message").Value(s.message);
+  j->Key("updates").Value(s.updates);
+  j->Key("nll_per_step").Value(s.updates ? -s.loglik / double(s.updates) : std::nan(""));
+  j->Key("mean_nis").Value(s.mean_nis);
+  j->Key("nis_bounds95").Value(std::vector<double>{s.nis_bounds95[0], s.nis_bounds95[1]});
+  if (!s.rmse.empty()) {
+    j->Key("rmse").BeginObject();
+    for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);
+    j->EndObject();
+    j->Key("mean_nees").Value(s.mean_nees);
+    j->Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});
+  }
+  j->EndObject();
+}
+
+struct Validation {
+  std::string path;
+  FilterSummary initial, tuned;
+  std::optional<FilterSummary> oracle;
+  std::string oracle_source;
+};
+
+Validation Validate(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& spec,
+                    const TuneResult& result) {
+  Validation v;
+  v.path = vm["validate"].as<std::string>();
+  if (model.run_filter == nullptr)
+    throw InputError("--validate: the filter runner of model '" + model.name +
+                     "' is not available");
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+  const FilterData data = LoadFilterData(v.path, model, meas, ParseColumnRenames(vm));
+  v.initial = model.run_filter(spec, data).summary;
+  v.tuned = model.run_filter(result.tuned_spec, data).summary;
+
+  // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar.
+  const int n = int(model.states.size()), m = int(meas.outputs.size());
+  std::vector<double> q_diag, r_diag;
+  std::string source;
+  std::ifstream sidecar(v.path + ".json");
+  if (sidecar) {
+    std::stringstream text;
+    text << sidecar.rdbuf();
+    const bool has_q = JsonNumberArray(text.str(), "process_noise_var", &q_diag);
+    const bool has_r = JsonNumberArray(text.str(), "meas_noise_var", &r_diag);
+    if (has_q && q_diag.empty()) q_diag.assign(n, 0.0);  // simulated without process noise
+    if (has_q || has_r) source = v.path + ".json";
+  }
+  if (vm.count("true-q-diag")) {
+    q_diag = ParseList(vm["true-q-diag"].as<std::string>(), "--true-q-diag");
+    RequireLength(q_diag, n, "--true-q-diag", "one per state");
+    source = "--true-q-diag/--true-r-diag";
+  }
+  if (vm.count("true-r-diag")) {
+    r_diag = ParseList(vm["true-r-diag"].as<std::string>(), "--true-r-diag");
+    RequireLength(r_diag, m, "--true-r-diag", "one per output");
+    source = "--true-q-diag/--true-r-diag";
+  }
+  if (q_diag.size() == size_t(n) && r_diag.size() == size_t(m)) {
+    RequireNonNegative(q_diag, "true process noise");
+    RequireNonNegative(r_diag, "true measurement noise");
+    FilterSpec oracle = spec;
+    oracle.q_white_accel = false;
+    oracle.q.assign(n * n, 0.0);
+    for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
+    oracle.r.assign(m * m, 0.0);
+    for (int i = 0; i < m; ++i) oracle.r[i * m + i] = r_diag[i];
+    v.oracle = model.run_filter(oracle, data).summary;
+    v.oracle_source = source;
+  }
+  return v;
+}
+
+void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
+                const std::optional<Validation>& validation, const std::string& out_path) {
+  const int n = int(model.states.size());
+  const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
+  std::cout << std::setprecision(6);
+  std::cout << "model         " << model.name << ", measurement " << spec.measurement << ", filter "
+            << FilterKindName(spec.kind) << (spec.iterations > 1 ? " (iterated)" : "")
+            << "\ndata          " << n_data << " dataset(s), " << r.updates
+            << " innovations after burn-in\nform          " << r.form << ", " << r.starts.size()
+            << " start(s), status " << TuneStatusName(r.status) << "\n";
+  if (!r.IsSolutionUsable()) {
+    std::cout << "              " << r.message << "\n";
+    return;
+  }
+  std::cout << "Ceres         " << r.termination << " (" << r.iterations << " iterations, start "
+            << r.best_start + 1 << ")\n";
+  std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n\n";
+  std::cout << "  parameter                     initial        tuned    SE(log)\n";
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    std::cout << "  " << std::left << std::setw(26) << r.names[i] << std::right << std::setw(12)
+              << r.theta_initial[i] << " " << std::setw(12) << r.theta[i] << " " << std::setw(10)
+              << r.std_errors[i]
+              << (r.poorly_identified[i] ? "  poorly identified by this data" : "")
+              << (r.at_bound[i] ? "  at a bound" : "") << "\n";
+  }
+  std::cout << "\ntuned Q"
+            << (r.q_white_accel ? " (qc = " + FormatNumber(r.qc) +
+                                      ", shown at dt = " + FormatNumber(r.dt_ref) + ")"
+                                : "")
+            << "\n";
+  for (int i = 0; i < n; ++i) {
+    std::cout << "  ";
+    for (int j = 0; j < n; ++j) std::cout << std::setw(13) << r.q[i * n + j];
+    std::cout << "\n";
+  }
+  std::cout << "tuned R\n";
+  for (int i = 0; i < m; ++i) {
+    std::cout << "  ";
+    for (int j = 0; j < m; ++j) std::cout << std::setw(13) << r.r[i * m + j];
+    std::cout << "\n";
+  }
+  std::cout << "wall time     " << r.wall_s << " s\n";
+  if (validation) {
+    std::cout << "\nvalidation on " << validation->path
+              << "\n  noise      NLL/step    mean NIS (95% bounds)          mean NEES   RMSE\n";
+    auto row = [&](const char* name, const FilterSummary& s) {
+      std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
+                << (s.updates ? -s.loglik / double(s.updates) : std::nan("")) << "  "
+                << std::setw(9) << s.mean_nis << " (" << s.nis_bounds95[0] << " .. "
+                << s.nis_bounds95[1] << ")  ";
+      if (!s.rmse.empty()) {
+        std::cout << std::setw(9) << s.mean_nees << "  ";
+        for (size_t i = 0; i < s.rmse.size(); ++i) std::cout << (i ? ", " : "") << s.rmse[i];
+      }
+      std::cout << (s.ok ? "" : "  (" + s.status + ")") << "\n";
+    };
+    row("initial", validation->initial);
+    row("tuned", validation->tuned);
+    if (validation->oracle) row("true", *validation->oracle);
+  }
+  if (!out_path.empty()) std::cout << "wrote         " << out_path << "\n";
+}
+
+std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r,
+                       const std::optional<Validation>& validation, const std::string& out_path) {
+  const int n = int(model.states.size());
+  const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
+  JsonWriter j;
+  j.BeginObject().Key("model").Value(model.name).Key("measurement").Value(spec.measurement);
+  j.Key("filter").Value(FilterKindName(spec.kind)).Key("form").Value(r.form);
+  j.Key("status").Value(TuneStatusName(r.status)).Key("message").Value(r.message);
+  if (r.IsSolutionUsable()) {
+    j.Key("tuned").BeginObject().Key("q");
+    WriteTuned(&j, r.q_param, r.q_white_accel, r.qc, r.q, n);
+    j.Key("r");
+    WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
+    j.EndObject();
+    j.Key("q_matrix");
+    WriteMatrix(&j, r.q, n);
+    if (r.q_white_accel) j.Key("q_matrix_dt").Value(r.dt_ref);
+    j.Key("r_matrix");
+    WriteMatrix(&j, r.r, m);
+  }
+  j.Key("parameters").Value(r.names);
+  j.Key("theta_initial").Value(r.theta_initial).Key("theta").Value(r.theta);
+  j.Key("std_errors_log").Value(r.std_errors);
+  std::vector<std::string> poor;
+  for (size_t i = 0; i < r.poorly_identified.size(); ++i)
+    if (r.poorly_identified[i]) poor.push_back(r.names[i]);
+  j.Key("poorly_identified").Value(poor);
+  j.Key("nll_initial").Value(r.nll_initial).Key("nll_tuned").Value(r.nll_tuned);
+  j.Key("updates").Value(r.updates);
+  j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
+  j.Key("wall_s").Value(r.wall_s);
+  j.Key("starts").BeginArray();
+  for (const auto& s : r.starts) {
+    j.BeginObject().Key("theta_start").Value(s.theta_start).Key("nll_start").Value(s.nll_start);
+    j.Key("nll_end").Value(s.nll_end).Key("iterations").Value(s.iterations);
+    j.Key("ok").Value(s.ok).Key("termination").Value(s.termination).EndObject();
+  }
+  j.EndArray();
+  if (validation) {
+    j.Key("validation").BeginObject().Key("data").Value(validation->path);
+    j.Key("initial");
+    WriteSummary(&j, validation->initial);
+    j.Key("tuned");
+    WriteSummary(&j, validation->tuned);
+    j.Key("oracle");
+    if (validation->oracle) {
+      WriteSummary(&j, *validation->oracle);
+      j.Key("oracle_source").Value(validation->oracle_source);
+    } else {
+      j.Null();
+    }
+    j.EndObject();
+  }
+  if (!out_path.empty()) j.Key("out").Value(out_path);
+  j.EndObject();
+  return j.str();
+}
+
+std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
+  if (!vm.count(opt)) return {};
+  return ParseList(vm[opt].as<std::string>(), "--" + opt);
+}
+
+}  // namespace
+
+int RunTune(const std::vector<std::string>& args) {
+  po::options_description desc(
+      "estlab tune: tune Q and R by maximum innovation likelihood (Ceres)");
+  desc.add_options()("help,h", "this text")(
+      "data", po::value<std::vector<std::string>>()->composing(), "training data CSV (repeatable)")(
+      "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
+      "init-r-scalar", po::value<std::string>(), "initial R = s I")(
+      "q-param", po::value<std::string>(),
+      "diag | full | white-accel | scalar | fixed (default: the --init-q* shape)")(
+      "r-param", po::value<std::string>(),
+      "diag | full | scalar | fixed (default: the --init-r* shape)")(
+      "starts", po::value<int>()->default_value(1),
+      "number of starts (1 = the initial guess only)")(
+      "start-spread", po::value<std::string>()->default_value("2"),
+      "Latin hypercube half-width in log space")("burn-in", po::value<int>()->default_value(0),
+                                                 "updates skipped at the start of each dataset")(
+      "form", po::value<std::string>()->default_value("lbfgs"), "lbfgs | least-squares")(
+      "bound-width", po::value<std::string>()->default_value("20"),
+      "log parameters within initial +- this")(
+      "log-lower", po::value<std::string>(),
+      "lower bound(s) of the log parameters: one, or one per parameter")(
+      "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
+      "max-iterations", po::value<int>()->default_value(200), "Ceres iterations per start")(
+      "validate", po::value<std::string>(), "validation data CSV")(
+      "true-q-diag", po::value<std::string>(),
+      "validation: true Q diagonal (else <validate>.json)")(
+      "true-r-diag", po::value<std::string>(),
+      "validation: true R diagonal (else <validate>.json)")(
+      "out", po::value<std::string>(),
+      "write the tuned Q/R as 'estlab filter' options (tuned.ini)")("json", "print a JSON summary");
+  AddFilterOptions(&desc, "init-");
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  po::notify(vm);
+  if (vm.count("help")) {
+    std::cout << desc << "\n" << kExamples;
+    return 0;
+  }
+  if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
+  if (!vm.count("data")) throw InputError("--data is required (one or more training files)");
+  const ModelEntry& model = FindModel(vm["model"].as<std::string>());
+  if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
+  if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
+  const MeasurementDesc& meas = model.FindMeasurement(vm["measure"].as<std::string>());
+  const int n = int(model.states.size()), m = int(meas.outputs.size());
+  ExpandScalarOption(&vm, "init-q-scalar", "init-q-diag",
+                     {"init-q-diag", "init-q", "init-q-white-accel"}, n);
+  ExpandScalarOption(&vm, "init-r-scalar", "init-r-diag", {"init-r-diag", "init-r"}, m);
+  const FilterSpec spec = BuildFilterSpec(vm, model, "init-");
+
+  TunerOptions options;
+  options.q_param = vm.count("q-param")
+                        ? ParseNoiseParam(vm["q-param"].as<std::string>(), "--q-param")
+                        : DefaultParam(vm, "q");
+  options.r_param = vm.count("r-param")
+                        ? ParseNoiseParam(vm["r-param"].as<std::string>(), "--r-param")
+                        : DefaultParam(vm, "r");
+  if (options.r_param == NoiseParam::kWhiteAccel)
+    throw InputError("--r-param: white-accel applies to Q only");
+  options.form = ParseTunerForm(vm["form"].as<std::string>());
+  options.starts = vm["starts"].as<int>();
+  options.start_spread = ParseNumber(vm["start-spread"].as<std::string>(), "--start-spread");
+  options.burn_in = vm["burn-in"].as<int>();
+  options.bound_width = ParseNumber(vm["bound-width"].as<std::string>(), "--bound-width");
+  options.log_lower = BoundList(vm, "log-lower");
+  options.log_upper = BoundList(vm, "log-upper");
+  options.max_iterations = vm["max-iterations"].as<int>();
+  options.seed = spec.seed;
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError(error);
+
+  std::vector<FilterData> datasets;
+  const auto renames = ParseColumnRenames(vm);
+  for (const auto& path : vm["data"].as<std::vector<std::string>>())
+    datasets.push_back(LoadFilterData(path, model, meas, renames));
+  if (vm.count("validate") && model.run_filter == nullptr)
+    throw InputError("--validate: the filter runner is not available");
+  // Open the output first so an unwritable path fails before the work.
+  const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";
+  std::optional<OutputFile> out;
+  if (!out_path.empty()) out.emplace(out_path);
+
+  const TuneResult result = model.tune(spec, options, datasets);
+  std::optional<Validation> validation;
+  if (result.IsSolutionUsable() && vm.count("validate"))
+    validation = Validate(vm, model, spec, result);
+  if (result.IsSolutionUsable() && out) {
+    out->stream() << "# estlab tune: model " << model.name << ", measurement " << spec.measurement
+                  << ", filter " << FilterKindName(spec.kind) << ", NLL "
+                  << FormatDouble(result.nll_initial) << " -> " << FormatDouble(result.nll_tuned)
+                  << " (" << TuneStatusName(result.status) << ")\n";
+    out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
+    out->stream() << IniLine("r", result.r_param, false, 0.0, result.r, m);
+    out->Commit();
+  }
+  if (vm.count("json")) {
+    std::cout << ResultJson(model, spec, result, validation,
+                            result.IsSolutionUsable() ? out_path : "")
+              << "\n";
+  } else {
+    PrintHuman(model, spec, result, datasets.size(), validation,
+               result.IsSolutionUsable() ? out_path : "");
+  }
+  if (!result.IsSolutionUsable()) {
+    std::cerr << "estlab: error: " << result.message << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace estlab::cli
