@@ -80,6 +80,16 @@ bool IsName(const std::string& s) {
   return true;
 }
 
+// Labels of '|' alternatives may also hold '.' and '+' ("s0.01", "1e+2").
+bool IsLabel(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' ||
+          c == '+'))
+      return false;
+  return true;
+}
+
 class ConfigErrors {
  public:
   explicit ConfigErrors(std::string path) : path_(std::move(path)) {}
@@ -367,16 +377,11 @@ std::vector<Alternative> ParseAlternatives(const Entry& e, const ConfigErrors& e
     Alternative a;
     a.value = parts[i];
     const auto colon = parts[i].find(':');
-    if (colon != std::string::npos && IsName(Trim(parts[i].substr(0, colon)))) {
+    if (colon != std::string::npos && IsLabel(Trim(parts[i].substr(0, colon)))) {
       a.label = Trim(parts[i].substr(0, colon));
       a.value = Trim(parts[i].substr(colon + 1));
     } else if (parts.size() > 1) {
-      bool plain = !a.value.empty();
-      for (char c : a.value)
-        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '+' ||
-              c == '.'))
-          plain = false;
-      a.label = plain ? a.value : e.key + std::to_string(i + 1);
+      a.label = IsLabel(a.value) ? a.value : e.key + std::to_string(i + 1);
     }
     if (a.value.empty() && parts.size() > 1) err.Fail(e.line, where + ": empty alternative");
     alts.push_back(a);

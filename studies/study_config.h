@@ -19,7 +19,7 @@
 //   jobs = 2                         # worker threads (default 1; --jobs overrides)
 //   keep-runs = 0,1                  # runs whose time series are written (default 0)
 //   step-metrics-every = 2           # per-step errors kept every k steps (default:
-//                                    # at most 200 points per run)
+//                                    # at most ~100 points per run)
 //
 //   [scenario.NAME]                  # one or more; NAME = [A-Za-z0-9_-]+
 //   model = pendulum                 # see `estlab list`
@@ -96,7 +96,7 @@ struct StudySettings {
   int runs = 10;
   int jobs = 1;
   std::vector<int> keep_runs = {0};
-  int step_metrics_every = 0;  // 0 = automatic (<= 200 points per run)
+  int step_metrics_every = 0;  // 0 = automatic (about 100 points per run)
 };
 
 // One filter x noise combination of a scenario, with its spec ready to run

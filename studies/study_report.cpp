@@ -253,11 +253,17 @@ void ClaimsSection(std::ostringstream& md, const StudyConfig& c, const StudyTabl
     }
     md << "holds in " << holds << " of " << cases.size() << " cases (" << significant
        << " with a paired 95 % interval that excludes zero).";
+    // The cases where it fails, the first few with their numbers.
     std::string fails;
-    for (const auto& cc : cases)
-      if (!cc.holds)
-        fails += (fails.empty() ? "" : "; ") + cc.label + " (" + Sig(cc.mean_a) + " vs " +
-                 Sig(cc.mean_b) + ")";
+    long failed = 0;
+    for (const auto& cc : cases) {
+      if (cc.holds) continue;
+      if (++failed > 4) continue;
+      fails += (fails.empty() ? "" : "; ") + cc.label + " (" + Sig(cc.mean_a, 6) + " vs " +
+               Sig(cc.mean_b, 6) + ", paired difference " + Sig(cc.diff, 3) + " [" + Sig(cc.lo, 3) +
+               ", " + Sig(cc.hi, 3) + "])";
+    }
+    if (failed > 4) fails += "; and " + std::to_string(failed - 4) + " more (see summary.csv)";
     if (!fails.empty()) md << " It does not hold in: " << fails << ".";
     md << "\n";
   }

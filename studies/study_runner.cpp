@@ -50,6 +50,13 @@ std::string Sig6(double v) {
   return buf;
 }
 
+std::string Sig10(double v) {
+  if (std::isnan(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
 std::string Full(double v) { return FormatDouble(v); }  // %.17g, NaN = ""
 
 std::string HexHash(uint64_t h) {
@@ -238,7 +245,7 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
       if (k % size_t(ctx.every) != 0 && k + 1 != out.rows.size()) continue;
       const auto& r = out.rows[k];
       std::vector<std::string> step = key;
-      step.push_back(Full(r[0]));
+      step.push_back(Sig10(r[0]));
       for (int col : err_cols) step.push_back(col >= 0 ? Sig6(r[col]) : "");
       step.push_back(nees_c >= 0 ? Sig6(r[nees_c]) : "");
       step.push_back(nis_c >= 0 ? Sig6(r[nis_c]) : "");
@@ -454,7 +461,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   int max_steps = 1;
   for (const auto& sc : config.scenarios) max_steps = std::max(max_steps, sc.steps + 1);
   ctx.every = config.study.step_metrics_every > 0 ? config.study.step_metrics_every
-                                                  : (max_steps + 199) / 200;
+                                                  : (max_steps + 99) / 100;
   ctx.keep.insert(config.study.keep_runs.begin(), config.study.keep_runs.end());
 
   std::ofstream runs_file(dir + "/runs.csv", std::ios::app | std::ios::binary);
