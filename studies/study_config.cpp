@@ -170,8 +170,24 @@ const std::vector<std::string> kScenarioKeys = {"model",
                                                 "prior-p0",
                                                 "input",
                                                 "description"};
-const std::vector<std::string> kNoiseKeys = {"q",      "q-diag",    "q-white-accel", "r",
-                                             "r-diag", "scenarios", "description"};
+const std::vector<std::string> kNoiseKeys = {"q",
+                                             "q-diag",
+                                             "q-white-accel",
+                                             "r",
+                                             "r-diag",
+                                             "scenarios",
+                                             "filters",
+                                             "description",
+                                             "init-q-diag",
+                                             "init-q",
+                                             "init-q-white-accel",
+                                             "init-r-diag",
+                                             "init-r",
+                                             "q-param",
+                                             "r-param",
+                                             "tune-datasets",
+                                             "tune-starts",
+                                             "tune-burn-in"};
 
 // `estlab filter` options that describe the data, the model or the noise
 // (set by the scenario and noise sections, not by [filter.NAME]).
@@ -670,27 +686,44 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     add(e.key, filt.Get(e.key)->text, filt.Get(e.key));
   }
   // Q and R: the noise section's keys, or placeholders replaced below.
-  bool q_oracle = false, r_oracle = false;
+  // `tuned` starts from the init-q-* / init-r-* key, else from the oracle.
+  bool q_oracle = false, r_oracle = false, q_tuned = false, r_tuned = false;
+  std::string q_shape, r_shape;  // the key that gave the (initial) matrix
   for (const char* key : {"q", "q-diag", "q-white-accel", "r", "r-diag"}) {
     const Value* val = noise.Get(key);
     if (!val) continue;
     const std::string k = key;
-    if (val->text == "tuned") {
-      noise.Fail(k,
-                 "'tuned' (the likelihood tuner) is not available yet in studies: the "
-                 "registry has no tuner entry point; use oracle or give values");
-    }
-    if (val->text == "oracle") {
-      if (k != "q" && k != "r") noise.Fail(k, "'oracle' goes in key " + k.substr(0, 1));
-      (k == "q" ? q_oracle : r_oracle) = true;
-      add(k + "-diag",
-          k == "q" ? JoinDoubles(std::vector<double>(n, 0.0))
-                   : JoinDoubles(std::vector<double>(m, 1.0)),
-          val);
+    const std::string which = k.substr(0, 1);
+    if (val->text == "oracle" || val->text == "tuned") {
+      if (k != which) noise.Fail(k, "'" + val->text + "' goes in key " + which);
+      const bool tuned = val->text == "tuned";
+      (which == "q" ? q_tuned : r_tuned) = tuned;
+      const Value* init = nullptr;
+      for (const std::string& ik :
+           which == "q" ? std::vector<std::string>{"init-q-diag", "init-q", "init-q-white-accel"}
+                        : std::vector<std::string>{"init-r-diag", "init-r"}) {
+        if (!noise.Has(ik)) continue;
+        if (!tuned) noise.Fail(ik, "an initial guess needs " + which + " = tuned");
+        if (init) noise.Fail(ik, "give only one initial " + which + " (init-" + which + "*)");
+        init = noise.Get(ik);
+        (which == "q" ? q_shape : r_shape) = ik.substr(5);
+        add(ik.substr(5), init->text, init);
+      }
+      if (!init) {
+        (which == "q" ? q_oracle : r_oracle) = true;
+        add(which + "-diag",
+            which == "q" ? JoinDoubles(std::vector<double>(n, 0.0))
+                         : JoinDoubles(std::vector<double>(m, 1.0)),
+            val);
+      }
       continue;
     }
+    (which == "q" ? q_shape : r_shape) = k;
     add(k, val->text, val);
   }
+  for (const char* ik : {"init-q-diag", "init-q", "init-q-white-accel", "init-r-diag", "init-r"})
+    if (noise.Has(ik) && !(ik[5] == 'q' ? q_tuned : r_tuned))
+      noise.Fail(ik, std::string("an initial guess needs ") + ik[5] + " = tuned");
 
   po::options_description desc;
   cli::AddFilterOptions(&desc);
@@ -747,20 +780,75 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   }
   spec.has_t0 = !sc.measure_at_t0;
   spec.t0 = 0.0;
+  if (q_tuned || r_tuned) {
+    combo.tune = true;
+    TunerOptions& t = combo.tuner;
+    auto param = [&](bool tuned, const std::string& which, const std::string& shape) {
+      if (!tuned) {
+        if (noise.Has(which + "-param"))
+          noise.Fail(which + "-param", "needs " + which + " = tuned");
+        return NoiseParam::kFixed;
+      }
+      if (noise.Has(which + "-param")) {
+        return Checked(*noise.Get(which + "-param"), err, [&](const std::string& t) {
+          const NoiseParam p = ParseNoiseParam(t, which + "-param");
+          if (p == NoiseParam::kFixed) throw InputError(which + "-param: fixed contradicts tuned");
+          return p;
+        });
+      }
+      if (shape == which + "-white-accel") return NoiseParam::kWhiteAccel;
+      if (shape == which) return NoiseParam::kFull;
+      if (shape.empty() && which == "q" && sc.oracle_q_white_accel) return NoiseParam::kWhiteAccel;
+      if (shape.empty() && which == "q") {
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j)
+            if (i != j && sc.oracle_q[i * n + j] != 0.0) return NoiseParam::kFull;
+      }
+      return NoiseParam::kDiag;
+    };
+    t.q_param = param(q_tuned, "q", q_shape);
+    t.r_param = param(r_tuned, "r", r_shape);
+    auto integer = [&](const std::string& key, long fallback, long min_value) {
+      if (!noise.Has(key)) return fallback;
+      return Checked(*noise.Get(key), err,
+                     [&](const std::string& t) { return ParseInteger(t, key, min_value); });
+    };
+    combo.tune_datasets = int(integer("tune-datasets", 3, 1));
+    t.starts = int(integer("tune-starts", 1, 1));
+    t.burn_in = int(integer("tune-burn-in", 0, 0));
+    t.compute_std_errors = true;
+    std::string error;
+    if (!t.IsValid(&error)) noise.FailSection(error);
+  } else {
+    for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in"})
+      if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
+  }
   return combo;
 }
 
 std::string NoiseDescription(const SectionValues& noise) {
-  std::string q, r;
-  for (const char* key : {"q", "q-diag", "q-white-accel"})
-    if (noise.Has(key))
-      q = noise.Get(key)->text == "oracle" ? "oracle"
-                                           : std::string(key) + " " + noise.Get(key)->text;
-  for (const char* key : {"r", "r-diag"})
-    if (noise.Has(key))
-      r = noise.Get(key)->text == "oracle" ? "oracle"
-                                           : std::string(key) + " " + noise.Get(key)->text;
-  return "Q " + q + ", R " + r;
+  auto describe = [&](const std::string& which, std::vector<std::string> keys) {
+    for (const auto& key : keys) {
+      if (!noise.Has(key)) continue;
+      const std::string& v = noise.Get(key)->text;
+      if (v == "oracle") return std::string("oracle");
+      if (v != "tuned") return key + " " + v;
+      std::string out = "tuned";
+      if (noise.Has(which + "-param")) out += " (" + noise.Get(which + "-param")->text + ")";
+      for (const auto& ik :
+           {"init-" + which + "-diag", "init-" + which, "init-" + which + "-white-accel"})
+        if (noise.Has(ik)) return out + " from " + ik.substr(5) + " " + noise.Get(ik)->text;
+      return out + " from the oracle";
+    }
+    return std::string("?");
+  };
+  std::string d = "Q " + describe("q", {"q", "q-diag", "q-white-accel"}) + ", R " +
+                  describe("r", {"r", "r-diag"});
+  if (noise.Has("tune-datasets") || noise.Has("tune-starts"))
+    d += " (" + (noise.Has("tune-datasets") ? noise.Get("tune-datasets")->text : "3") +
+         " tuning trajectories, " +
+         (noise.Has("tune-starts") ? noise.Get("tune-starts")->text : "1") + " start(s))";
+  return d;
 }
 
 // Tries every combination on a two-step noise-free trajectory, so that
@@ -790,6 +878,16 @@ void DryRun(const ScenarioConfig& sc, const StudyConfig& config,
   for (const Combo& c : sc.combos) {
     try {
       (void)model.run_filter(c.spec, data);
+      if (c.tune) {
+        if (model.tune == nullptr)
+          throw InputError("model '" + model.name + "' has no likelihood tuner in this build");
+        TunerOptions quick = c.tuner;
+        quick.starts = 1;
+        quick.burn_in = 0;
+        quick.max_iterations = 1;
+        quick.compute_std_errors = false;
+        (void)model.tune(c.spec, quick, {data});
+      }
     } catch (const InputError& e) {
       err.Fail(filter_values[c.filter].section().line,
                "[filter." + config.filters[c.filter].name + "] with [" + sc.section +
@@ -965,13 +1063,22 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
     const int nr = int(v.Has("r")) + int(v.Has("r-diag"));
     if (nq != 1)
       v.FailSection(
-          "give exactly one of q, q-diag, q-white-accel (q = oracle: the "
-          "truth's process noise)");
+          "give exactly one of q, q-diag, q-white-accel (q = oracle: the truth's process "
+          "noise; q = tuned: the likelihood tuner)");
     if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
     nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
     if (v.Has("scenarios"))
       nc.scenarios = Checked(*v.Get("scenarios"), err,
                              [](const std::string& t) { return ParseNameList(t, "scenarios"); });
+    if (v.Has("filters")) {
+      nc.filters = Checked(*v.Get("filters"), err,
+                           [](const std::string& t) { return ParseNameList(t, "filters"); });
+      for (const auto& name : nc.filters) {
+        bool found = false;
+        for (const auto& f : c.filters) found |= f.name == name;
+        if (!found) v.Fail("filters", "no [filter." + name + "]");
+      }
+    }
     c.noises.push_back(nc);
   }
   for (size_t i = 0; i < filter_secs.size(); ++i)
@@ -1017,6 +1124,9 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
         for (size_t ni = 0; ni < c.noises.size(); ++ni) {
           const auto& ns = c.noises[ni].scenarios;
           if (!ns.empty() && std::find(ns.begin(), ns.end(), s->name) == ns.end()) continue;
+          const auto& nf = c.noises[ni].filters;
+          if (!nf.empty() && std::find(nf.begin(), nf.end(), c.filters[fi].name) == nf.end())
+            continue;
           sc.combos.push_back(
               BuildCombo(sc, v, int(fi), filter_values[fi], int(ni), noise_values[ni], err));
         }

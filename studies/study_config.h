@@ -58,11 +58,21 @@
 //   scenarios = a,b                  # optional: only these scenario sections
 //
 //   [noise.NAME]                     # Q/R settings, each filter runs with each
-//   q = oracle                       # oracle = the truth's noise;
-//   r = oracle                       # tuned = the likelihood tuner (when built)
+//   q = oracle                       # oracle = the truth's noise
+//   r = oracle
 //   # or, as in `estlab filter`: q-diag | q (matrix a,b;c,d) | q-white-accel,
 //   #   r-diag | r (matrix); exactly one Q and one R key.
-//   scenarios = a,b                  # optional
+//   scenarios = a,b                  # optional: only these scenario sections
+//   filters = ekf,ukf                # optional: only these filters
+//
+//   [noise.tuned]                    # the likelihood tuner (ModelEntry::tune), once
+//   q = tuned                        #   per scenario x filter before the runs, on
+//   r = tuned                        #   tune-datasets trajectories with their own seeds
+//   init-q-white-accel = 0.1         # start (also init-q-diag, init-q, init-r-diag,
+//   init-r-diag = 0.05               #   init-r; default: the oracle); its shape is the
+//   q-param = white-accel            #   parameterisation unless q-param / r-param say
+//   tune-datasets = 3                #   diag | full | white-accel | scalar
+//   tune-starts = 2                  # multi-start (default 1); tune-burn-in = 0
 //
 //   [report]                         # optional: the paper's numbers and claims
 //   paper = 002
@@ -84,6 +94,7 @@
 #include <utility>
 #include <vector>
 
+#include "adaptive/tuner.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
 
@@ -105,6 +116,13 @@ struct Combo {
   int filter = 0;  // index into StudyConfig::filters
   int noise = 0;   // index into StudyConfig::noises
   FilterSpec spec;
+  // Noise `tuned`: before the runs, ModelEntry::tune fits Q and/or R (the
+  // other is kFixed) from spec's values on `tune_datasets` trajectories of
+  // the scenario simulated with their own seeds, and spec takes the result.
+  bool tune = false;
+  TunerOptions tuner;
+  int tune_datasets = 0;
+  std::string tune_failure;  // set by the runner when no tuned Q/R came out
 };
 
 struct ScenarioConfig {
@@ -135,8 +153,9 @@ struct FilterConfig {
 
 struct NoiseConfig {
   std::string name;
-  std::string description;  // "Q oracle, R diag 0.09"
-  std::vector<std::string> scenarios;
+  std::string description;             // "Q oracle, R diag 0.09"
+  std::vector<std::string> scenarios;  // empty = all
+  std::vector<std::string> filters;    // empty = all
 };
 
 // A number from the paper, to be printed beside ours in report.md.

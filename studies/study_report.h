@@ -29,6 +29,7 @@ struct GroupValues {
 
 struct StudyTables {
   std::map<std::string, GroupValues> groups;  // "scenario/filter/noise"
+  CsvText tuned;                              // tuned.csv (empty without `tuned` noise settings)
 };
 
 std::string StudyReportMarkdown(const StudyConfig& config, const StudyTables& tables,

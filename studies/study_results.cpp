@@ -368,6 +368,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
       gv.values[runs_cols[j]].push_back(ToDouble(r[j]));
     }
   }
+  if (fs::exists(dir + "/tuned.csv")) tables.tuned = ReadCsvText(dir + "/tuned.csv");
   for (const auto& r : timing.rows) {
     tables.groups[GroupKey(r[0], r[1], r[2])].us_per_step.push_back(ToDouble(r[4]));
   }
@@ -535,6 +536,14 @@ void MergeStudies(const std::string& out, const std::vector<std::string>& shard_
       throw InputError("merge: run " + r[3] + " of " + r[0] + "/" + r[1] + "/" + r[2] +
                        " occurs in two shards");
   WriteTextFile(out + "/config.ini", config_text);
+  // Tuned Q/R: every shard tuned the same way (own seeds); keep one copy.
+  const std::string tuned = fs::exists(shard_dirs[0] + "/tuned.csv")
+                                ? ReadAll(shard_dirs[0] + "/tuned.csv")
+                                : std::string();
+  for (const auto& d : shard_dirs)
+    if ((fs::exists(d + "/tuned.csv") ? ReadAll(d + "/tuned.csv") : std::string()) != tuned)
+      throw InputError("merge: " + d + "/tuned.csv differs from " + shard_dirs[0] + "/tuned.csv");
+  if (!tuned.empty()) WriteTextFile(out + "/tuned.csv", tuned);
   WriteRowFile(out + "/runs.csv", RunsColumns(config), runs);
   WriteRowFile(out + "/steps.csv", StepsColumns(config), steps);
   WriteRowFile(out + "/timing.csv", TimingColumns(), timing);

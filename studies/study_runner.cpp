@@ -22,6 +22,7 @@
 #include <sstream>
 #include <thread>
 
+#include "adaptive/tuner.h"
 #include "estlab_version.h"
 #include "src/core/random.h"
 #include "src/core/types.h"
@@ -144,13 +145,30 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
   file.Commit();
 }
 
+// The measurements (and truth) of a simulated trajectory, as a filter reads them.
+FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth,
+                         const std::string& label) {
+  const int n = int(sc.model->states.size());
+  FilterData data;
+  data.path = label;
+  data.m = int(truth.columns.size()) - 1 - n;
+  data.has_truth = true;
+  for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
+    const auto& row = truth.rows[k];
+    data.t.push_back(row[0]);
+    data.lines.push_back(long(k));
+    for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
+    for (int j = 0; j < data.m; ++j) data.z.push_back(row[1 + n + j]);
+  }
+  return data;
+}
+
 RunText RunOne(const RunContext& ctx, int s, int run) {
   const StudyConfig& c = *ctx.config;
   const ScenarioConfig& sc = c.scenarios[s];
   const ModelEntry& model = *sc.model;
   const uint64_t seed = DeriveSeed({c.study.seed, uint64_t(s), uint64_t(run)});
   const auto& states = model.states;
-  const int n = int(states.size());
 
   SimulationSpec sim = sc.truth;
   sim.seed = seed;
@@ -165,18 +183,8 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
   }
 
   FilterData data;
-  data.path = "scenario " + sc.name + " run " + std::to_string(run);
-  if (truth_error.empty()) {
-    data.m = int(truth.columns.size()) - 1 - n;
-    data.has_truth = true;
-    for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
-      const auto& row = truth.rows[k];
-      data.t.push_back(row[0]);
-      data.lines.push_back(long(k));
-      for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
-      for (int j = 0; j < data.m; ++j) data.z.push_back(row[1 + n + j]);
-    }
-  }
+  if (truth_error.empty())
+    data = DataFromTruth(sc, truth, "scenario " + sc.name + " run " + std::to_string(run));
 
   RunText text;
   for (const Combo& cb : sc.combos) {
@@ -188,6 +196,9 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     if (!truth_error.empty()) {
       status = "truth_failed";
       message = truth_error;
+    } else if (!cb.tune_failure.empty()) {
+      status = "tune_failed";
+      message = cb.tune_failure;
     } else {
       FilterSpec spec = cb.spec;
       spec.seed = ComboSeed(seed, fname, nname);
@@ -255,6 +266,97 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
       WriteTimeseries(ctx, sc, run, fname, nname, data, out);
   }
   return text;
+}
+
+// ---------------------------------------------------------------------------
+// Noise `tuned`: fit Q/R once per scenario x filter x noise before the runs.
+
+constexpr uint64_t kTuneSeedTag = 0x74756E65ull;  // "tune"
+
+std::string JoinValues(const std::vector<double>& v) {
+  std::string out;
+  for (double x : v) {
+    if (!out.empty()) out += ' ';
+    out += Sig10(x);
+  }
+  return out;
+}
+
+std::vector<std::string> TunedColumns() {
+  return {"scenario", "filter",      "noise",     "status",     "datasets",
+          "updates",  "nll_initial", "nll_tuned", "iterations", "q_param",
+          "r_param",  "qc",          "q",         "r",          "message"};
+}
+
+// Runs every tuning (in parallel over `jobs` threads, results in a fixed
+// order), puts the tuned Q/R into the combos and returns tuned.csv's text
+// ("" when nothing is tuned). Deterministic: the tuning trajectories have
+// their own seeds, DeriveSeed({seed, s, "tune", k}).
+std::string TuneNoise(StudyConfig* config, int jobs) {
+  struct Job {
+    int s, c;
+  };
+  std::vector<Job> job_list;
+  for (size_t s = 0; s < config->scenarios.size(); ++s)
+    for (size_t c = 0; c < config->scenarios[s].combos.size(); ++c)
+      if (config->scenarios[s].combos[c].tune) job_list.push_back({int(s), int(c)});
+  if (job_list.empty()) return "";
+  std::vector<std::string> rows(job_list.size());
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t j; (j = next.fetch_add(1)) < job_list.size();) {
+      const int s = job_list[j].s;
+      ScenarioConfig& sc = config->scenarios[s];
+      Combo& cb = sc.combos[job_list[j].c];
+      std::vector<FilterData> datasets;
+      std::string failure;
+      for (int k = 0; k < cb.tune_datasets && failure.empty(); ++k) {
+        SimulationSpec sim = sc.truth;
+        sim.seed = DeriveSeed({config->study.seed, uint64_t(s), kTuneSeedTag, uint64_t(k)});
+        if (sc.sample_x0) sim.x0 = SampleX0(sc, sim.seed);
+        try {
+          const SimulationResult truth = sc.model->simulate(sim);
+          if (!truth.ok)
+            failure = "tuning trajectory " + std::to_string(k) + ": " + truth.error;
+          else
+            datasets.push_back(DataFromTruth(sc, truth, "tuning trajectory " + std::to_string(k)));
+        } catch (const std::exception& e) {
+          failure = "tuning trajectory " + std::to_string(k) + ": " + e.what();
+        }
+      }
+      TuneResult r;
+      if (failure.empty()) {
+        try {
+          r = sc.model->tune(cb.spec, cb.tuner, datasets);
+          if (!r.IsSolutionUsable()) failure = "tuning failed: " + r.message;
+        } catch (const std::exception& e) {
+          failure = std::string("tuning failed: ") + e.what();
+        }
+      }
+      if (failure.empty()) {
+        FilterSpec tuned = r.tuned_spec;
+        tuned.has_t0 = cb.spec.has_t0;
+        tuned.t0 = cb.spec.t0;
+        cb.spec = tuned;
+      } else {
+        cb.tune_failure = failure;
+      }
+      rows[j] = FormatCsvRow(
+          {sc.name, config->filters[cb.filter].name, config->noises[cb.noise].name,
+           failure.empty() ? TuneStatusName(r.status) : "failed", std::to_string(cb.tune_datasets),
+           std::to_string(r.updates), Sig10(r.nll_initial), Sig10(r.nll_tuned),
+           std::to_string(r.iterations), NoiseParamName(cb.tuner.q_param),
+           NoiseParamName(cb.tuner.r_param), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
+           JoinValues(r.r), failure});
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int w = 0; w < std::max(1, std::min<int>(jobs, int(job_list.size()))); ++w)
+    threads.emplace_back(work);
+  for (auto& t : threads) t.join();
+  std::string csv = FormatCsvRow(TunedColumns());
+  for (const auto& r : rows) csv += r;
+  return csv;
 }
 
 // ---------------------------------------------------------------------------
@@ -455,8 +557,20 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
 
   WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
 
+  // Tuned noise settings (a copy of the config carries the tuned Q/R).
+  StudyConfig tuned_config = config;
+  if (!tasks.empty() || !fs::exists(dir + "/tuned.csv")) {
+    bool any_tuned = false;
+    for (const auto& sc : config.scenarios)
+      for (const auto& cb : sc.combos) any_tuned |= cb.tune;
+    if (any_tuned && options.progress)
+      std::cerr << "estlab study: tuning Q/R for the 'tuned' noise settings...\n";
+    const std::string tuned_csv = TuneNoise(&tuned_config, jobs);
+    if (!tuned_csv.empty()) WriteTextFile(dir + "/tuned.csv", tuned_csv);
+  }
+
   RunContext ctx;
-  ctx.config = &config;
+  ctx.config = &tuned_config;
   ctx.dir = dir;
   int max_steps = 1;
   for (const auto& sc : config.scenarios) max_steps = std::max(max_steps, sc.steps + 1);

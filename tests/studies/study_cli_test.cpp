@@ -7,7 +7,9 @@
 
 #include <fcntl.h>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <thread>
 
 #include "../cli/cli_test_util.h"
@@ -105,7 +107,7 @@ pid_t StartStudy(const TempDir& dir, const std::string& out) {
 }
 
 TEST_F(StudyCli, InterruptedStudyResumesToTheSameFiles) {
-  WriteText(dir_.File("s.ini"), TinyStudy(150, 40, 400));
+  WriteText(dir_.File("s.ini"), TinyStudy(100, 40, 300));
   const pid_t pid = StartStudy(dir_, "r");
   // Wait for the first finished runs, then SIGTERM.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
@@ -120,12 +122,12 @@ TEST_F(StudyCli, InterruptedStudyResumesToTheSameFiles) {
   EXPECT_NE(err.find("r/runs.csv; run the same command again to resume"), std::string::npos) << err;
   const size_t partial = SplitLines(RunsCsv(dir_, "r")).size();
   EXPECT_GT(partial, 1u);
-  EXPECT_LT(partial, 1u + 150 * 6);
+  EXPECT_LT(partial, 1u + 100 * 6);
   EXPECT_FALSE(dir_.Exists("r/summary.csv"));
   // Simulate a write cut short as well: a partial last line is dropped.
   {
     std::ofstream f(dir_.File("r/runs.csv"), std::ios::app);
-    f << "pend,ekf,oracle,149,123,ok,0.1";
+    f << "pend,ekf,oracle,99,123,ok,0.1";
   }
   const auto resumed = RunEstlab("study s.ini --out r --jobs 2 --quiet", dir_.path());
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
@@ -139,8 +141,34 @@ TEST_F(StudyCli, InterruptedStudyResumesToTheSameFiles) {
   const std::string before = RunsCsv(dir_, "r");
   const auto again = RunEstlab("study s.ini --out r --quiet", dir_.path());
   ASSERT_EQ(again.exit_code, 0) << again.err;
-  EXPECT_NE(again.out.find("150 runs (150 from before)"), std::string::npos) << again.out;
+  EXPECT_NE(again.out.find("100 runs (100 from before)"), std::string::npos) << again.out;
   EXPECT_EQ(RunsCsv(dir_, "r"), before);
+}
+
+TEST_F(StudyCli, TunedNoiseIsFittedOnceAndReported) {
+  WriteText(dir_.File("s.ini"), TinyStudy(3, 25, 100, /*tuned=*/true));
+  const auto r1 = RunEstlab("study s.ini --out t1 --jobs 1 --quiet", dir_.path());
+  ASSERT_EQ(r1.exit_code, 0) << r1.err;
+  const auto r2 = RunEstlab("study s.ini --out t2 --jobs 2 --quiet", dir_.path());
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  for (const char* f : {"tuned.csv", "runs.csv", "summary.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("t1/") + f)),
+              ReadFile(dir_.File(std::string("t2/") + f)))
+        << f;
+  const auto tuned = SplitLines(ReadFile(dir_.File("t1/tuned.csv")));
+  ASSERT_EQ(tuned.size(), 3u);  // header, ekf, ukf
+  EXPECT_EQ(tuned[1].rfind("pend,ekf,tuned,", 0), 0u) << tuned[1];
+  EXPECT_EQ(tuned[1].find(",failed,"), std::string::npos) << tuned[1];
+  // The tuned qc (column 12) moved away from the start, 0.1.
+  std::vector<std::string> fields;
+  std::stringstream row(tuned[1]);
+  for (std::string f; std::getline(row, f, ',');) fields.push_back(f);
+  ASSERT_GT(fields.size(), 11u);
+  EXPECT_GT(std::abs(std::stod(fields[11]) - 0.1), 1e-3) << tuned[1];
+  EXPECT_NE(ReadFile(dir_.File("t1/report.md")).find("Tuned noise"), std::string::npos);
+  const auto lines = SplitLines(RunsCsv(dir_, "t1"));
+  EXPECT_EQ(lines.size(), 1u + 3 * 8);
+  EXPECT_NE(RunsCsv(dir_, "t1").find("pend,ukf,tuned,2,"), std::string::npos);
 }
 
 TEST_F(StudyCli, FiguresWriteScriptsDataAndImages) {

@@ -98,7 +98,8 @@ TEST(StudyConfig, ErrorsNameFileLineAndKey) {
       {"runs = 2", "runs = 0", "s.ini:4: [study] runs: must be >= 1"},
       {"[noise.hand]", "[nosie.hand]", "s.ini:39: unknown section [nosie.hand]"},
       {"q-diag = 1e-3,1e-2", "q-diag = 1e-3", "s.ini:40: [noise.hand] q-diag: expected 2 values"},
-      {"r = oracle", "r = tuned", "s.ini:37: [noise.oracle] r: 'tuned'"},
+      {"q-diag = 1e-3,1e-2", "q-diag = tuned",
+       "s.ini:40: [noise.hand] q-diag: 'tuned' goes in key q"},
       {"measurement = sin", "measurement = cos",
        "s.ini:16: [scenario.pend] measurement: unknown measurement 'cos'"},
       {"seed = 7", "seed = 7\nseed = 8", "s.ini:4: key 'seed' given twice in [study]"},
@@ -126,6 +127,34 @@ TEST(StudyConfig, OracleRNeedsMeasurementNoise) {
   EXPECT_NE(message.find("s.ini:37: [noise.oracle] r: the oracle R of [scenario.pend] is singular"),
             std::string::npos)
       << message;
+}
+
+TEST(StudyConfig, TunedNoiseSettings) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const StudyConfig c = ParseStudyConfig(TinyStudy(3, 25, 100, /*tuned=*/true), "s.ini");
+  const ScenarioConfig& s = c.scenarios[0];
+  // 3 filters x 2 settings + EKF and UKF with the tuned setting (not the PF).
+  ASSERT_EQ(s.combos.size(), 8u);
+  const Combo& ekf_tuned = s.combos[2];
+  EXPECT_EQ(c.noises[ekf_tuned.noise].name, "tuned");
+  EXPECT_TRUE(ekf_tuned.tune);
+  EXPECT_EQ(ekf_tuned.tune_datasets, 2);
+  EXPECT_EQ(ekf_tuned.tuner.q_param, NoiseParam::kWhiteAccel);  // the start's shape
+  EXPECT_EQ(ekf_tuned.tuner.r_param, NoiseParam::kDiag);
+  EXPECT_TRUE(ekf_tuned.spec.q_white_accel);
+  EXPECT_DOUBLE_EQ(ekf_tuned.spec.qc, 0.1);  // the start
+  EXPECT_EQ(ekf_tuned.spec.r, std::vector<double>{0.1});
+  EXPECT_FALSE(s.combos[0].tune);
+  // Errors: a start without `tuned`, and the tuner on a particle filter.
+  std::string text = TinyStudy(3, 25, 100, true);
+  EXPECT_EQ(ParseError(Replace(text, "r = tuned\ninit-r-diag", "r = oracle\ninit-r-diag"))
+                .rfind("s.ini:47: [noise.tuned] init-r-diag: an initial guess needs r = tuned", 0),
+            0u)
+      << ParseError(Replace(text, "r = tuned\ninit-r-diag", "r = oracle\ninit-r-diag"));
+  EXPECT_NE(ParseError(Replace(text, "filters = ekf,ukf", "filters = ekf,pf"))
+                .find("s.ini:29: [filter.pf] with [scenario.pend] and [noise.tuned]"),
+            std::string::npos)
+      << ParseError(Replace(text, "filters = ekf,ukf", "filters = ekf,pf"));
 }
 
 // The truth's white-acceleration covariance pairs states (0,1), (2,3), ...;

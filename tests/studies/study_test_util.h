@@ -10,8 +10,18 @@
 namespace estlab::testing {
 
 // Pendulum with sin measurement, 25 steps: EKF, UKF and a 100-particle PF,
-// each with the oracle noise and with a hand-tuned Q/R.
-inline std::string TinyStudy(int runs, int steps = 25, int particles = 100) {
+// each with the oracle noise and with a hand-tuned Q/R (and, with `tuned`,
+// EKF and UKF with Q/R from the likelihood tuner, after the other settings).
+inline std::string TinyStudy(int runs, int steps = 25, int particles = 100, bool tuned = false) {
+  const std::string tuned_section =
+      "[noise.tuned]\n"
+      "q = tuned\n"
+      "init-q-white-accel = 0.1\n"
+      "r = tuned\n"
+      "init-r-diag = 0.1\n"
+      "tune-datasets = 2\n"
+      "filters = ekf,ukf\n"
+      "\n";
   return "[study]\n"
          "name = tiny\n"
          "seed = 7\n"
@@ -59,7 +69,8 @@ inline std::string TinyStudy(int runs, int steps = 25, int particles = 100) {
          "[noise.hand]\n"
          "q-diag = 1e-3,1e-2\n"
          "r-diag = 0.02\n"
-         "\n"
+         "\n" +
+         (tuned ? tuned_section : std::string()) +
          "[report]\n"
          "reference = pend/ekf/oracle rmse_theta mean=0.1 var=0.01 | made up\n"
          "claim = rmse_theta: pf < ekf | PF beats EKF\n";
