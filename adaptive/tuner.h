@@ -82,6 +82,13 @@ struct TunerOptions {
   double bound_width = 20.0;
   std::vector<double> log_lower, log_upper;
 
+  // Before each start, minimise the NLL over a common scale of Q and R
+  // (every log parameter + s, off-diagonal Cholesky entries * e^(s/2)) on a
+  // grid s = -8..8 refined by golden section. From guesses far off in overall
+  // scale (an overconfident filter) L-BFGS otherwise tends to drive single
+  // variances into the flat valley log q -> -inf.
+  bool scale_search = true;
+
   int max_iterations = 200;
   double function_tolerance = 1e-12;  // relative change of the NLL
   double gradient_tolerance = 1e-8;   // max-norm of the gradient (L-BFGS)
@@ -108,9 +115,12 @@ enum class TuneStatus {
 };
 const char* TuneStatusName(TuneStatus status);
 
-// One start of the multi-start.
+// One start of the multi-start: theta_start is the start point (initial guess
+// or Latin hypercube), nll_start the NLL where Ceres began (after the
+// common-scale pre-search shifted theta_start by scale_shift).
 struct TuneStart {
   std::vector<double> theta_start, theta_end;
+  double scale_shift = 0.0;               // s of the common-scale pre-search (0 when off)
   double nll_start = 0.0, nll_end = 0.0;  // +inf when the filter failed
   int iterations = 0;
   bool ok = false;

@@ -282,6 +282,59 @@ inline std::vector<std::vector<double>> StartPoints(const TunerOptions& o,
   return points;
 }
 
+// theta with Q and R scaled by e^s: log parameters + s, off-diagonal
+// Cholesky entries * e^(s/2).
+inline std::vector<double> ScaleShifted(const std::vector<double>& theta,
+                                        const std::vector<bool>& is_log, double s) {
+  std::vector<double> out(theta);
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = is_log[i] ? out[i] + s : out[i] * std::exp(0.5 * s);
+  return out;
+}
+
+// The common-scale pre-search (TunerOptions::scale_search): returns the s in
+// [-8, 8] (within the bounds) minimising NLL(ScaleShifted(theta, s)), 0 when
+// no shifted point is better than theta itself.
+template <class Model, class Meas>
+double ScaleSearch(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
+                   const std::vector<bool>& is_log, const std::vector<double>& lower,
+                   const std::vector<double>& upper) {
+  double lo = -8.0, hi = 8.0;
+  bool any_log = false;
+  for (size_t i = 0; i < theta.size(); ++i) {
+    if (!is_log[i]) continue;
+    any_log = true;
+    lo = std::max(lo, lower[i] - theta[i]);
+    hi = std::min(hi, upper[i] - theta[i]);
+  }
+  if (!any_log || !(lo < hi)) return 0.0;
+  auto nll = [&](double s) {
+    const std::vector<double> t = ScaleShifted(theta, is_log, s);
+    double f = kInf;
+    return objective.Value(t.data(), &f) && std::isfinite(f) ? f : kInf;
+  };
+  double best_s = 0.0, best_f = (lo <= 0.0 && 0.0 <= hi) ? nll(0.0) : kInf;
+  for (double s = std::ceil(lo); s <= hi; s += 1.0) {
+    const double f = nll(s);
+    if (f < best_f) best_f = f, best_s = s;
+  }
+  if (!std::isfinite(best_f)) return 0.0;
+  // Golden section on [best_s - 1, best_s + 1].
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = std::max(lo, best_s - 1.0), b = std::min(hi, best_s + 1.0);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = nll(c), fd = nll(d);
+  for (int it = 0; it < 30 && b - a > 1e-4; ++it) {
+    if (fc < fd) {
+      b = d, d = c, fd = fc, c = b - g * (b - a), fc = nll(c);
+    } else {
+      a = c, c = d, fc = fd, d = a + g * (b - a), fd = nll(d);
+    }
+  }
+  const double s = fc < fd ? c : d;
+  return std::min(fc, fd) < best_f ? s : best_s;
+}
+
 template <class Model, class Meas>
 TuneStart RunLbfgs(const Objective<Model, Meas>& objective, const TunerOptions& o,
                    const std::vector<double>& lower, const std::vector<double>& upper,
@@ -416,6 +469,12 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   std::vector<bool> converged(points.size(), false);
   for (size_t s = 0; s < points.size(); ++s) {
     bool conv = false;
+    std::vector<double> from = points[s];
+    double shift = 0.0;
+    if (k > 0 && options.scale_search) {
+      shift = ScaleSearch(objective, from, result.is_log, lower, upper);
+      from = ScaleShifted(from, result.is_log, shift);
+    }
     if (k == 0) {
       TuneStart st;
       st.theta_start = st.theta_end = points[s];
@@ -425,11 +484,12 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
       conv = st.ok;
       result.starts.push_back(st);
     } else if (options.form == TunerForm::kLbfgs) {
-      result.starts.push_back(RunLbfgs(objective, options, lower, upper, points[s], &conv));
+      result.starts.push_back(RunLbfgs(objective, options, lower, upper, from, &conv));
     } else {
-      result.starts.push_back(
-          RunLeastSquares(objective, options, lower, upper, points[s], M, &conv));
+      result.starts.push_back(RunLeastSquares(objective, options, lower, upper, from, M, &conv));
     }
+    result.starts.back().theta_start = points[s];
+    result.starts.back().scale_shift = shift;
     converged[s] = conv;
     const TuneStart& st = result.starts.back();
     if (st.ok && (result.best_start < 0 || st.nll_end < result.starts[result.best_start].nll_end))

@@ -1,0 +1,154 @@
+// `estlab tune` end to end: simulate, tune, validate, write tuned.ini, and the
+// exit statuses for bad input (2) and divergence at every start (1).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <boost/program_options.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CmdResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class TuneCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("estlab_tune_cli_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  CmdResult Estlab(const std::string& args) {
+    const std::string out = (dir_ / "stdout.txt").string(), err = (dir_ / "stderr.txt").string();
+    const std::string cmd = "cd '" + dir_.string() + "' && '" ESTLAB_BINARY "' " + args + " >'" +
+                            out + "' 2>'" + err + "'";
+    const int status = std::system(cmd.c_str());
+    CmdResult r;
+    if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+    r.out = Slurp(out);
+    r.err = Slurp(err);
+    return r;
+  }
+  bool Exists(const std::string& name) const { return fs::exists(dir_ / name); }
+  std::string File(const std::string& name) const { return (dir_ / name).string(); }
+
+  void Simulate(const std::string& out, int seed) {
+    const CmdResult r = Estlab(
+        "simulate --model pendulum --x0 theta=0.785398 --t-end 10 --dt 0.01 --integrator rk4 "
+        "--process-noise-var 1e-6,1e-4 --measure sin --meas-noise-var 0.01 --seed " +
+        std::to_string(seed) + " --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+
+  static constexpr const char* kFilter =
+      "--model pendulum --measure sin --filter ekf --integrator rk4 --x0 theta=0.785398 "
+      "--p0-diag 1e-4,1e-4 ";
+
+  fs::path dir_;
+};
+
+TEST_F(TuneCli, TunesValidatesAndWritesAnIniThatFilterReads) {
+  Simulate("train.csv", 1);
+  Simulate("valid.csv", 2);
+  const CmdResult r = Estlab(std::string("tune ") + kFilter +
+                       "--data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+                       "--validate valid.csv --out tuned.ini --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  for (const char* key :
+       {"\"tuned\": {\"q\": {\"param\": \"diag\", \"diag\": [", "\"r\": {\"param\": \"diag\"",
+        "\"q_matrix\": [[", "\"r_matrix\": [[", "\"std_errors_log\"", "\"nll_initial\"",
+        "\"nll_tuned\"", "\"iterations\"", "\"termination\"", "\"wall_s\"", "\"validation\"",
+        "\"initial\": {", "\"tuned\": {\"status\"", "\"oracle\": {", "\"nll_per_step\"",
+        "\"mean_nis\"", "\"rmse\"", "\"mean_nees\"", "\"status\": \"converged\""}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << "missing " << key << " in\n" << r.out;
+  }
+  ASSERT_TRUE(Exists("tuned.ini"));
+  const std::string ini = Slurp(File("tuned.ini"));
+  EXPECT_NE(ini.find("q-diag = "), std::string::npos) << ini;
+  EXPECT_NE(ini.find("r-diag = "), std::string::npos) << ini;
+
+  // The file parses as a Boost config file with the options of `estlab filter`.
+  namespace po = boost::program_options;
+  po::options_description desc;
+  desc.add_options()("q-diag", po::value<std::string>())("q", po::value<std::string>())(
+      "q-white-accel", po::value<std::string>())("r-diag", po::value<std::string>())(
+      "r", po::value<std::string>());
+  po::variables_map vm;
+  std::ifstream in(File("tuned.ini"));
+  po::store(po::parse_config_file(in, desc), vm);
+  ASSERT_TRUE(vm.count("q-diag") && vm.count("r-diag"));
+  const double r_tuned = std::stod(vm["r-diag"].as<std::string>());
+  EXPECT_NEAR(r_tuned, 0.01, 0.002);  // simulated R = 0.01 over 1000 updates
+
+  // And `estlab filter` runs with it.
+  const CmdResult f = Estlab(std::string("filter ") + kFilter + "--data valid.csv --q-diag " +
+                       vm["q-diag"].as<std::string>() + " --r-diag " +
+                       vm["r-diag"].as<std::string>() + " --out est.csv");
+  EXPECT_EQ(f.exit_code, 0) << f.err;
+}
+
+TEST_F(TuneCli, WhiteAccelScalarLeastSquaresAndHumanOutput) {
+  Simulate("train.csv", 3);
+  const CmdResult r = Estlab(std::string("tune ") + kFilter +
+                       "--data train.csv --data train.csv --init-q-white-accel 0.1 "
+                       "--init-r-scalar 0.1 --form least-squares --starts 2 --burn-in 10 "
+                       "--out tuned.ini");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("form          least-squares"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("log qc"), std::string::npos) << r.out;
+  const std::string ini = Slurp(File("tuned.ini"));
+  EXPECT_NE(ini.find("q-white-accel = "), std::string::npos) << ini;
+  EXPECT_NE(ini.find("r-diag = "), std::string::npos) << ini;
+}
+
+TEST_F(TuneCli, BadInputExitsTwo) {
+  Simulate("train.csv", 4);
+  const std::string base = std::string("tune ") + kFilter + "--data train.csv ";
+  for (const std::string& bad :
+       {base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --burn-in 5000",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --log-lower 1 --log-upper 0",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --q-param nope",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --r-param white-accel",
+        base + "--init-q-diag 1e-4,1e-2 --init-r '1,0;0,1' --r-param full",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --init-r-scalar 1",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --integrator cvodes",
+        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --filter pf",
+        std::string("tune ") + kFilter + "--init-q-diag 1e-4,1e-2 --init-r-diag 1"}) {
+    const CmdResult r = Estlab(bad + " --out tuned.ini");
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: error:"), std::string::npos) << r.err;
+    EXPECT_FALSE(Exists("tuned.ini")) << bad;
+  }
+}
+
+TEST_F(TuneCli, EveryStartDivergingExitsOneWithoutIni) {
+  Simulate("train.csv", 5);
+  // trace(P0) = 2e13 exceeds the divergence guard (1e12) at the first row.
+  const CmdResult r = Estlab(
+      "tune --model pendulum --measure sin --filter ekf --integrator rk4 --x0 theta=0.785398 "
+      "--p0-diag 1e13,1e13 --data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+      "--starts 3 --out tuned.ini --json");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.out.find("\"status\": \"all-starts-diverged\""), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("diverged"), std::string::npos) << r.err;
+  EXPECT_FALSE(Exists("tuned.ini"));
+}
+
+}  // namespace
