@@ -68,8 +68,8 @@ TEST_F(TuneCli, TunesValidatesAndWritesAnIniThatFilterReads) {
   Simulate("train.csv", 1);
   Simulate("valid.csv", 2);
   const CmdResult r = Estlab(std::string("tune ") + kFilter +
-                       "--data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 "
-                       "--validate valid.csv --out tuned.ini --json");
+                             "--data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+                             "--validate valid.csv --out tuned.ini --json");
   ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
   for (const char* key :
        {"\"tuned\": {\"q\": {\"param\": \"diag\", \"diag\": [", "\"r\": {\"param\": \"diag\"",
@@ -99,17 +99,17 @@ TEST_F(TuneCli, TunesValidatesAndWritesAnIniThatFilterReads) {
 
   // And `estlab filter` runs with it.
   const CmdResult f = Estlab(std::string("filter ") + kFilter + "--data valid.csv --q-diag " +
-                       vm["q-diag"].as<std::string>() + " --r-diag " +
-                       vm["r-diag"].as<std::string>() + " --out est.csv");
+                             vm["q-diag"].as<std::string>() + " --r-diag " +
+                             vm["r-diag"].as<std::string>() + " --out est.csv");
   EXPECT_EQ(f.exit_code, 0) << f.err;
 }
 
 TEST_F(TuneCli, WhiteAccelScalarLeastSquaresAndHumanOutput) {
   Simulate("train.csv", 3);
   const CmdResult r = Estlab(std::string("tune ") + kFilter +
-                       "--data train.csv --data train.csv --init-q-white-accel 0.1 "
-                       "--init-r-scalar 0.1 --form least-squares --starts 2 --burn-in 10 "
-                       "--out tuned.ini");
+                             "--data train.csv --data train.csv --init-q-white-accel 0.1 "
+                             "--init-r-scalar 0.1 --form least-squares --starts 2 --burn-in 10 "
+                             "--out tuned.ini");
   ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
   EXPECT_NE(r.out.find("form          least-squares"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("log qc"), std::string::npos) << r.out;
