@@ -120,8 +120,7 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
                      const FilterRunOutput& out) {
   const auto& states = sc.model->states;
   const int n = int(states.size());
-  const fs::path folder = fs::path(ctx.dir) / "timeseries" / sc.name;
-  fs::create_directories(folder);
+  const fs::path folder = fs::path(ctx.dir) / "timeseries" / sc.name;  // made by RunStudy
   OutputFile file(
       (folder / ("run" + std::to_string(run) + "_" + filter + "_" + noise + ".csv")).string());
   std::ostream& os = file.stream();
@@ -577,6 +576,10 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   ctx.every = config.study.step_metrics_every > 0 ? config.study.step_metrics_every
                                                   : (max_steps + 99) / 100;
   ctx.keep.insert(config.study.keep_runs.begin(), config.study.keep_runs.end());
+  // The time-series folders, here rather than racing in the workers.
+  if (!ctx.keep.empty())
+    for (const auto& sc : config.scenarios)
+      fs::create_directories(fs::path(dir) / "timeseries" / sc.name);
 
   std::ofstream runs_file(dir + "/runs.csv", std::ios::app | std::ios::binary);
   std::ofstream steps_file(dir + "/steps.csv", std::ios::app | std::ios::binary);
