@@ -29,6 +29,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -113,7 +114,11 @@ class CvodesTransition final : public Transition<Model> {
       have_last_ = false;
       std::ostringstream msg;
       msg << "CVODES failed at t = " << t_reached << " while stepping from t = " << t0
-          << " to t = " << t1 << ": " << CVodeGetReturnFlagName(flag);
+          << " to t = " << t1 << ": ";
+      // CVodeGetReturnFlagName returns a malloc'd string that the caller frees.
+      char* flag_name = CVodeGetReturnFlagName(flag);
+      msg << (flag_name != nullptr ? flag_name : "unknown CVODES flag");
+      std::free(flag_name);
       if (!callback_error_.empty()) msg << " (" << callback_error_ << ")";
       throw NumericalError(msg.str());
     }
