@@ -4,10 +4,12 @@ ASAN_BUILD ?= build-asan
 JOBS       ?= 2
 CMAKE_FLAGS ?=
 
-DEB_PACKAGES := cmake g++ make git pkg-config libsundials-dev libceres-dev libeigen3-dev \
+DEB_PACKAGES := cmake g++ make git pkg-config ccache libsundials-dev libceres-dev libeigen3-dev \
                 libboost-program-options-dev libgtest-dev libbenchmark-dev gnuplot-nox
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 ESTLAB := $(BUILD)/estlab
+# ccache keys on paths relative to the clone, so clones share cache entries.
+export CCACHE_BASEDIR := $(CURDIR)
 
 .PHONY: all deps configure build test test-asan demo bench format clean
 
