@@ -23,6 +23,12 @@
 //         C = sum Wc_i wrap(Y_i - x-) dZ_i^T,  K = C S^-1,  nu = wrap(z - z^)
 //         x+ = x- + K nu,  P+ = P- - K S K^T
 //
+//   KF    the model linearised once about x* (spec.linearize_at, else the
+//         prior mean) and discretised exactly over each step length of the data
+//         (src/filters/kalman.h, computed once in double):
+//         x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
+//         nu = wrap(z - h(x*) - H wrap(x- - x*)),  S = H P- H^T + R,  Joseph update
+//
 // Per update the recursion hands the whitened innovation e_k = L_k^-1 nu_k
 // (S_k = L_k L_k^T) and log det S_k = 2 sum log (L_k)_ii to a sink; the NLL
 // term is 1/2 (e_k^T e_k + log det S_k + m log 2 pi). No matrix is inverted.
@@ -40,8 +46,14 @@
 //   ceres::Jet<double, 2> th[2] = {...};                  // gradient by AD
 //   ceres::Jet<double, 2> g = NegLogLikelihood(lik, th);
 //
-// WARNING: the transition must be a fixed-step one (Euler, semi-implicit
-// Euler, RK4); CVODES is not differentiable in theta here. A failed Cholesky,
+// CVODES. With spec.transition.integrator = cvodes the recursion runs in
+// double only, through a Cvodes transition (src/ode/cvodes.h; its flow
+// Jacobian from forward sensitivities for the EKF) at rtol <= kCvodesRtol,
+// atol <= kCvodesAtol: tighter than the filter's default so that central
+// differences of the NLL (tuner_impl.h) are honest. Run<Jet>() then fails.
+//
+// WARNING: a Cvodes transition is not thread-safe, so neither is an
+// InnovationLikelihood with integrator cvodes: one per thread. A failed Cholesky,
 // a non-finite value or trace(P) above spec.max_cov_trace makes Run() return
 // false (the tuner treats that trial point as infeasible).
 #ifndef ESTLAB_ADAPTIVE_LIKELIHOOD_H_
@@ -55,15 +67,19 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "adaptive/nested_jet.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
+#include "src/filters/kalman.h"
 #include "src/filters/sigma_rules.h"
 #include "src/ode/fixed_step.h"
+#include "src/ode/transition.h"
 #include "src/registry/model_traits.h"
 #include "src/run/filter_spec.h"
 
@@ -133,6 +149,13 @@ class InnovationLikelihood {
   const CovarianceParam<kM>& r_param() const { return r_; }
   long NumTerms() const { return terms_; }  // updates after burn-in, all datasets
   double dt_ref() const { return dt_ref_; }
+  // True when the process model is CVODES: only Run<double> works, and the
+  // tuner differentiates the NLL by central differences.
+  bool UsesCvodes() const { return cvodes_ != nullptr; }
+
+  // CVODES tolerances of the likelihood (the spec's, if tighter).
+  static constexpr double kCvodesRtol = 1e-10;
+  static constexpr double kCvodesAtol = 1e-12;
 
   // Runs the filter over every dataset with Q(theta), R(theta); calls
   // sink(e_k, log det S_k) for every update after burn-in. Returns false
@@ -172,6 +195,24 @@ class InnovationLikelihood {
   bool Gain(const StateT<T>& x, const StateCovT<T>& P, const Vec<double, kM>& z,
             const MeasCovT<T>& R, MeasT<T>* residual, Eigen::Matrix<T, kM, kN>* H, MeasCovT<T>* S,
             Eigen::LLT<MeasCovT<T>>* llt, Eigen::Matrix<T, kN, kM>* K) const;
+
+  // KF: one discretisation per distinct step length of the data.
+  struct KfStep {
+    double dt;
+    Mat<kN, kN> phi;
+    Vec<double, kN> gamma, drift;
+  };
+  const KfStep* FindKfStep(double dt) const {
+    for (const KfStep& s : kf_steps_)
+      if (s.dt == dt) return &s;
+    return nullptr;
+  }
+  void SetUpKf(const std::vector<FilterData>& datasets);
+  template <class T>
+  bool PredictKf(StateT<T>* x, StateCovT<T>* P, double dt, double u, const StateCovT<T>& Q) const;
+  template <class T>
+  bool UpdateKf(StateT<T>* x, StateCovT<T>* P, const Vec<double, kM>& z, const MeasCovT<T>& R,
+                MeasT<T>* whitened, T* log_det) const;
 
   template <class T>
   bool PredictEkf(StateT<T>* x, StateCovT<T>* P, double t0, double t1, double u,
@@ -225,6 +266,15 @@ class InnovationLikelihood {
   bool sigma_ = false;
   Eigen::MatrixXd unit_points_;
   Eigen::VectorXd mean_weights_, cov_weights_;
+  // KF (see KfStep).
+  bool kf_ = false;
+  Vec<double, kN> x_star_ = Vec<double, kN>::Zero();
+  double u_star_ = 0.0;
+  Vec<double, kM> h_star_ = Vec<double, kM>::Zero();
+  Mat<kM, kN> h_jacobian_ = Mat<kM, kN>::Zero();
+  std::vector<KfStep> kf_steps_;
+  // CVODES process model (null for the fixed-step ones); Step() is not const.
+  std::unique_ptr<Transition<Model>> cvodes_;
 };
 
 // NLL(theta), quiet NaN when the filter fails.
@@ -301,19 +351,14 @@ const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
                             const std::vector<FilterData>& datasets) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
-  if (spec.kind == FilterKind::kKf || spec.kind == FilterKind::kPf) {
+  if (spec.kind == FilterKind::kPf) {
     throw InputError(
-        std::string("the tuner supports the ekf, iekf, ukf, ckf and ghkf filters, not ") +
-        FilterKindName(spec.kind));
+        "the tuner supports the kf, ekf, iekf, ukf, ckf and ghkf filters, not pf (its "
+        "likelihood is a random, non-smooth function of Q and R)");
   }
   if (spec.iterations < 1) throw InputError("EKF iterations must be >= 1");
   if (!spec.adapt.rule.empty())
     throw InputError("the tuner needs a filter without online adaptation (--adapt)");
-  if (spec.transition.integrator == Integrator::kCvodes) {
-    throw InputError(
-        "the tuner needs a fixed-step process model (--integrator rk4, euler or "
-        "semi-implicit-euler), not cvodes");
-  }
   if (!(spec.transition.substeps >= 1)) throw InputError("substeps must be >= 1");
   if (spec.x0.size() != size_t(Model::kStateDim))
     throw InputError("x0 has " + std::to_string(spec.x0.size()) + " entries, expected " +
@@ -385,7 +430,17 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     }
     terms_ += updates - options.burn_in;
   }
-  if (spec.kind != FilterKind::kEkf) {
+  if (spec.kind == FilterKind::kKf) {
+    SetUpKf(datasets);
+  } else if (spec.transition.integrator == Integrator::kCvodes) {
+    TransitionOptions o = spec.transition;
+    o.rtol = std::min(o.rtol, kCvodesRtol);
+    o.atol = std::min(o.atol, kCvodesAtol);
+    std::string error;
+    if (!o.IsValid(&error)) throw InputError(error);
+    cvodes_ = MakeTransition<Model>(params_, o);
+  }
+  if (spec.kind != FilterKind::kEkf && spec.kind != FilterKind::kKf) {
     sigma_ = true;
     SigmaPointOptions o;
     o.rule = spec.kind == FilterKind::kUkf   ? SigmaRule::kUnscented
@@ -442,6 +497,13 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
   };
   const T* theta_q = theta;
   const T* theta_r = theta + q_.NumParams();
+  if constexpr (!std::is_same_v<T, double>) {
+    if (cvodes_ != nullptr) {
+      if (why != nullptr)
+        *why = "a CVODES process model has no AD gradient (use central differences)";
+      return false;
+    }
+  }
   const MeasCovT<T> R = r_.template Matrix<T>(theta_r, 0.0);
   StateCovT<T> Q = q_.template Matrix<T>(theta_q, dt_ref_);
   double q_dt = dt_ref_;
@@ -462,8 +524,15 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
           q_dt = t - t_prev;
           Q = q_.template Matrix<T>(theta_q, q_dt);
         }
-        const bool ok = sigma_ ? PredictSigma<T>(&x, &P, &propagated, t_prev, t, u, Q)
-                               : PredictEkf<T>(&x, &P, t_prev, t, u, Q);
+        bool ok = false;
+        try {
+          ok = kf_      ? PredictKf<T>(&x, &P, t - t_prev, u, Q)
+               : sigma_ ? PredictSigma<T>(&x, &P, &propagated, t_prev, t, u, Q)
+                        : PredictEkf<T>(&x, &P, t_prev, t, u, Q);
+        } catch (const NumericalError& e) {  // CVODES failed
+          if (why != nullptr) *why = e.what();
+          return false;
+        }
         if (!ok) return fail(d, k, "prediction failed");
         predicted = true;
       }
@@ -478,8 +547,9 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
         MeasT<T> e;
         T log_det;
         const bool ok =
-            sigma_ ? UpdateSigma<T>(&x, &P, predicted ? &propagated : nullptr, z, R, &e, &log_det)
-                   : UpdateEkf<T>(&x, &P, z, R, &e, &log_det);
+            kf_      ? UpdateKf<T>(&x, &P, z, R, &e, &log_det)
+            : sigma_ ? UpdateSigma<T>(&x, &P, predicted ? &propagated : nullptr, z, R, &e, &log_det)
+                     : UpdateEkf<T>(&x, &P, z, R, &e, &log_det);
         if (!ok) return fail(d, k, "update failed (innovation covariance not positive definite)");
         if (update_index >= options_.burn_in) sink(e, log_det);
         ++update_index;
@@ -502,6 +572,16 @@ bool InnovationLikelihood<Model, Meas>::PredictEkf(StateT<T>* x, StateCovT<T>* P
                                                    double t1, double u,
                                                    const StateCovT<T>& Q) const {
   StateCovT<T> F;
+  if constexpr (std::is_same_v<T, double>) {
+    if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
+      cvodes_->SetInput(u);
+      *x = cvodes_->StepWithJacobian(*x, t0, t1, &F);
+      if (!x->allFinite() || !F.allFinite()) return false;
+      const StateCovT<T> Pm = F * (*P) * F.transpose() + Q;
+      *P = 0.5 * (Pm + Pm.transpose());
+      return true;
+    }
+  }
   const Integrator scheme = spec_.transition.integrator;
   const int substeps = spec_.transition.substeps;
   const Params& p = params_;
@@ -598,7 +678,16 @@ bool InnovationLikelihood<Model, Meas>::PredictSigma(StateT<T>* x, StateCovT<T>*
                                                      const StateCovT<T>& Q) const {
   if (!SigmaPoints<T>(*x, *P, true, propagated)) return false;
   const int count = int(propagated->size());
+  if constexpr (std::is_same_v<T, double>) {
+    if (cvodes_ != nullptr) cvodes_->SetInput(u);
+  }
   for (auto& point : *propagated) {
+    if constexpr (std::is_same_v<T, double>) {
+      if (cvodes_ != nullptr) {
+        point = cvodes_->Step(point, t0, t1);
+        continue;
+      }
+    }
     point = FixedPropagate<Model, T>(spec_.transition.integrator, point, t0, t1,
                                      spec_.transition.substeps, u, params_);
   }
@@ -660,6 +749,79 @@ bool InnovationLikelihood<Model, Meas>::UpdateSigma(StateT<T>* x, StateCovT<T>* 
   // x+ = x- + K nu,  P+ = P- - K S K^T
   *x += K * nu;
   const StateCovT<T> Pp = *P - K * S * K.transpose();
+  *P = 0.5 * (Pp + Pp.transpose());
+  return true;
+}
+
+template <class Model, class Meas>
+void InnovationLikelihood<Model, Meas>::SetUpKf(const std::vector<FilterData>& datasets) {
+  kf_ = true;
+  KfOptions o;
+  o.operating_point = spec_.linearize_at;
+  o.operating_input = spec_.input;
+  LinearizedKf<Model, Meas> kf(params_, o);  // throws InputError for a bad operating point
+  kf.Initialize(x0_, p0_);
+  x_star_ = kf.operating_point();
+  u_star_ = spec_.input;
+  h_jacobian_ = kf.H();
+  h_star_ = Meas::template Eval<double>(x_star_, params_);
+  // Phi, Gamma, d for every step length that Run() will meet.
+  auto add = [&](double dt) {
+    if (!(dt > 0.0) || FindKfStep(dt) != nullptr) return;
+    if (kf.Predict(0.0, dt, Mat<kN, kN>::Zero()) != FilterStatus::kOk)
+      throw InputError("the linearised model (kf) is not finite at the operating point: " +
+                       kf.last_error());
+    kf_steps_.push_back({dt, kf.Phi(), kf.Gamma(), kf.d()});
+  };
+  for (const FilterData& d : datasets) {
+    if (d.t.empty()) continue;
+    double t_prev = spec_.has_t0 ? spec_.t0 : d.t[0];
+    for (double t : d.t) {
+      if (t > t_prev) add(t - t_prev);
+      t_prev = t;
+    }
+  }
+}
+
+template <class Model, class Meas>
+template <class T>
+bool InnovationLikelihood<Model, Meas>::PredictKf(StateT<T>* x, StateCovT<T>* P, double dt,
+                                                  double u, const StateCovT<T>& Q) const {
+  const KfStep* step = FindKfStep(dt);
+  if (step == nullptr) return false;  // cannot happen: SetUpKf saw every step
+  // x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
+  const StateT<T> delta = WrapStates<T>(*x - x_star_.template cast<T>());
+  const Mat<kN, kN>& phi = step->phi;
+  const StateT<T> x_pred = x_star_.template cast<T>() + phi.template cast<T>() * delta +
+                           (step->gamma * (u - u_star_) + step->drift).template cast<T>();
+  const StateCovT<T> Pm = phi.template cast<T>() * (*P) * phi.transpose().template cast<T>() + Q;
+  *x = x_pred;
+  *P = 0.5 * (Pm + Pm.transpose());
+  return true;
+}
+
+template <class Model, class Meas>
+template <class T>
+bool InnovationLikelihood<Model, Meas>::UpdateKf(StateT<T>* x, StateCovT<T>* P,
+                                                 const Vec<double, kM>& z, const MeasCovT<T>& R,
+                                                 MeasT<T>* whitened, T* log_det) const {
+  const Eigen::Matrix<T, kM, kN> H = h_jacobian_.template cast<T>();
+  // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
+  const StateT<T> delta = WrapStates<T>(*x - x_star_.template cast<T>());
+  const MeasT<T> z_pred = h_star_.template cast<T>() + H * delta;
+  const MeasT<T> nu = WrapOutputs<T>(z.template cast<T>() - z_pred);
+  // S = H P H^T + R,  K^T = S^-1 (H P)
+  const Eigen::Matrix<T, kM, kN> HP = H * (*P);
+  MeasCovT<T> S = HP * H.transpose() + R;
+  S = (0.5 * (S + S.transpose())).eval();
+  const Eigen::LLT<MeasCovT<T>> llt(S);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::Matrix<T, kN, kM> K = llt.solve(HP).transpose();
+  Whiten<T>(llt, nu, whitened, log_det);
+  // x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T
+  const StateCovT<T> I_KH = StateCovT<T>::Identity() - K * H;
+  const StateCovT<T> Pp = I_KH * (*P) * I_KH.transpose() + K * R * K.transpose();
+  *x += K * nu;
   *P = 0.5 * (Pp + Pp.transpose());
   return true;
 }

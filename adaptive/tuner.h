@@ -6,10 +6,12 @@
 //   NLL(theta) = 1/2 sum_datasets sum_{k >= burn_in} [ log det S_k
 //                + nu_k^T S_k^-1 nu_k + m log 2 pi ]
 //
-// with nu_k, S_k the innovations and their covariances of an EKF or a
-// sigma-point filter (UKF, CKF) run with Q(theta), R(theta) over fixed-step
-// (Euler, semi-implicit Euler, RK4) transitions. theta holds log-variances,
-// so every Q(theta), R(theta) is positive (semi-)definite by construction.
+// with nu_k, S_k the innovations and their covariances of a linearised KF,
+// an EKF (IEKF) or a sigma-point filter (UKF, CKF, GHKF) run with Q(theta),
+// R(theta) over fixed-step (Euler, semi-implicit Euler, RK4; exact AD
+// gradient) or CVODES transitions (central-difference gradient). theta holds
+// log-variances, so every Q(theta), R(theta) is positive (semi-)definite by
+// construction.
 //
 // Usage:
 //   FilterSpec spec = ...;                // the filter and the initial Q, R

@@ -26,6 +26,9 @@ constexpr const char* kExamples = R"(Examples:
   estlab filter --model pendulum --param g=9.8 --measure sin --filter pf --particles 1000 \
       --resample residual --data d.csv --integrator euler --x0 theta=0.785398 \
       --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.09 --out est_pf.csv --json
+  # The Q and R that 'estlab tune --out tuned.ini' found (the command line wins):
+  estlab filter --model pendulum --param g=9.8 --measure sin --filter ukf --data d.csv \
+      --integrator euler --x0 theta=0.785398 --p0-diag 0.1,0.1 --config tuned.ini --out est.csv
   # Adaptive UKF (Sage-Husa on R) on a file with other column names:
   estlab filter --model pendulum --measure angle --filter ukf --adapt sage-husa \
       --adapt-what r --data lab.csv --column z_theta=angle_rad --q-diag 1e-6,1e-4 \
@@ -86,7 +89,12 @@ std::string FilterSummaryJson(const FilterSummary& s) {
   j.Key("nis_bounds95").Value(std::vector<double>{s.nis_bounds95[0], s.nis_bounds95[1]});
   j.Key("mean_nees").Value(s.mean_nees);
   j.Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});
-  j.Key("steps").Value(s.steps).Key("wall_s").Value(s.wall_s).Key("us_per_step").Value(s.us_per_step);
+  j.Key("steps")
+      .Value(s.steps)
+      .Key("wall_s")
+      .Value(s.wall_s)
+      .Key("us_per_step")
+      .Value(s.us_per_step);
   j.Key("status").Value(s.status);
   if (!s.ok) j.Key("message").Value(s.message);
   j.Key("adapt_clips").Value(s.adapt_clips);
@@ -95,12 +103,15 @@ std::string FilterSummaryJson(const FilterSummary& s) {
 }
 
 int RunFilterCommand(const std::vector<std::string>& args) {
-  po::options_description desc("estlab filter: run a Kalman-family or particle filter over a data file");
-  desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")
-      ("out", po::value<std::string>(), "per-step output CSV")("json", "print a JSON summary");
+  po::options_description desc(
+      "estlab filter: run a Kalman-family or particle filter over a data file");
+  desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
+      "out", po::value<std::string>(), "per-step output CSV")("json", "print a JSON summary");
   AddFilterOptions(&desc);
+  AddConfigOption(&desc);
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
+  MergeConfigFiles(&vm);
   po::notify(vm);
   if (vm.count("help")) {
     std::cout << desc << "\n" << kExamples;
@@ -111,9 +122,9 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   if (!vm.count("out")) throw InputError("--out is required");
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   const FilterSpec spec = BuildFilterSpec(vm, model);
-  const FilterData data = LoadFilterData(vm["data"].as<std::string>(), model,
-                                         model.FindMeasurement(spec.measurement),
-                                         ParseColumnRenames(vm));
+  const FilterData data =
+      LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
+                     ParseColumnRenames(vm));
   const std::string out_path = vm["out"].as<std::string>();
   OutputFile out(out_path);
   const FilterRunOutput result = model.run_filter(spec, data);

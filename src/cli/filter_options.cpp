@@ -2,7 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 
 #include "src/cli/args.h"
 #include "src/io/csv_reader.h"
@@ -12,6 +14,8 @@ namespace po = boost::program_options;
 namespace estlab::cli {
 
 void AddFilterOptions(po::options_description* desc, const std::string& np) {
+  // One option a line.
+  // clang-format off
   desc->add_options()
       ("model", po::value<std::string>(), "model name (see 'estlab list')")
       ("measure", po::value<std::string>(), "measurement name of the model")
@@ -51,6 +55,7 @@ void AddFilterOptions(po::options_description* desc, const std::string& np) {
       ("input", po::value<std::string>()->default_value("0"), "constant input when the data has no 'u' column")
       ("column", po::value<std::vector<std::string>>()->composing(), "map a column: ours=theirs, e.g. z_theta=angle_rad")
       ("full-cov", "write every covariance entry, not only the diagonal");
+  // clang-format on
 }
 
 std::vector<std::pair<std::string, std::string>> ParseColumnRenames(const po::variables_map& vm) {
@@ -75,9 +80,53 @@ void CheckCovariance(const std::vector<double>& a, int n, const std::string& wha
     throw InputError(what + " is not symmetric");
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
   const double min_eig = eig.eigenvalues().minCoeff();
-  if (allow_semidefinite ? min_eig < -1e-12 * scale : !(Eigen::LLT<Eigen::MatrixXd>(A).info() == Eigen::Success && min_eig > 0)) {
+  if (allow_semidefinite
+          ? min_eig < -1e-12 * scale
+          : !(Eigen::LLT<Eigen::MatrixXd>(A).info() == Eigen::Success && min_eig > 0)) {
     throw InputError(what + " is not positive " + (allow_semidefinite ? "semi-" : "") +
                      "definite (smallest eigenvalue " + FormatNumber(min_eig) + ")");
+  }
+}
+
+void AddConfigOption(po::options_description* desc) {
+  desc->add_options()("config", po::value<std::vector<std::string>>()->composing(),
+                      "read filter options from FILE ('key = value' lines, e.g. tuned.ini from "
+                      "'estlab tune --out'); the command line wins (repeatable)");
+}
+
+void MergeConfigFiles(po::variables_map* vm, const std::string& np) {
+  if (!vm->count("config")) return;
+  const std::vector<std::string> files = (*vm)["config"].as<std::vector<std::string>>();
+  auto given = [&](const std::string& key) { return vm->count(key) && !(*vm)[key].defaulted(); };
+  const std::vector<std::string> q_keys = {"q-diag", "q", "q-white-accel", "q-scalar"};
+  const std::vector<std::string> r_keys = {"r-diag", "r", "r-scalar"};
+  auto any_given = [&](const std::vector<std::string>& keys) {
+    for (const auto& k : keys)
+      if (given(np + k)) return true;
+    return false;
+  };
+  const bool cmd_q = any_given(q_keys), cmd_r = any_given(r_keys);
+  po::options_description file_desc;
+  AddFilterOptions(&file_desc, "");
+  for (const std::string& path : files) {
+    std::ifstream in(path);
+    if (!in) throw InputError("--config: cannot read '" + path + "'");
+    po::variables_map file_vm;
+    try {
+      po::store(po::parse_config_file(in, file_desc, false), file_vm);
+    } catch (const po::error& e) {
+      throw InputError("--config " + path + ": " + e.what());
+    }
+    for (const auto& [key, value] : file_vm) {
+      if (value.defaulted()) continue;
+      const bool is_q = std::find(q_keys.begin(), q_keys.end(), key) != q_keys.end();
+      const bool is_r = std::find(r_keys.begin(), r_keys.end(), key) != r_keys.end();
+      if ((is_q && cmd_q) || (is_r && cmd_r)) continue;
+      const std::string target = (is_q || is_r) ? np + key : key;
+      if (given(target)) continue;
+      (*vm).erase(target);
+      vm->insert({target, value});
+    }
   }
 }
 
@@ -120,9 +169,12 @@ FilterSpec BuildFilterSpec(const po::variables_map& vm, const ModelEntry& model,
   spec.transition.integrator = ParseIntegrator(vm["integrator"].as<std::string>());
   spec.transition.substeps = vm["substeps"].as<int>();
   const std::string method = vm["method"].as<std::string>();
-  if (method == "bdf") spec.transition.method = CvodesMethod::kBdf;
-  else if (method == "adams") spec.transition.method = CvodesMethod::kAdams;
-  else if (method != "default") throw InputError("--method: unknown CVODES method '" + method + "'");
+  if (method == "bdf")
+    spec.transition.method = CvodesMethod::kBdf;
+  else if (method == "adams")
+    spec.transition.method = CvodesMethod::kAdams;
+  else if (method != "default")
+    throw InputError("--method: unknown CVODES method '" + method + "'");
   spec.transition.rtol = ParseNumber(vm["rtol"].as<std::string>(), "--rtol");
   spec.transition.atol = ParseNumber(vm["atol"].as<std::string>(), "--atol");
   spec.transition.max_steps = vm["max-steps"].as<long>();
@@ -274,8 +326,8 @@ FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
       for (int i = 0; i < n; ++i) data.truth.push_back(row[sc[i]]);
     if (data.has_input) {
       if (!std::isfinite(row[uc]))
-        throw InputError(path + ":" + std::to_string(line) + ": column " +
-                         std::to_string(uc + 1) + " ('u'): missing input");
+        throw InputError(path + ":" + std::to_string(line) + ": column " + std::to_string(uc + 1) +
+                         " ('u'): missing input");
       data.u.push_back(row[uc]);
     }
   }

@@ -17,9 +17,23 @@ namespace estlab::cli {
 void AddFilterOptions(boost::program_options::options_description* desc,
                       const std::string& noise_prefix = "");
 
+// Adds --config FILE (repeatable): filter options as 'key = value' lines,
+// e.g. the tuned.ini that 'estlab tune --out' writes.
+void AddConfigOption(boost::program_options::options_description* desc);
+
+// Merges the --config files named in *vm into *vm. Keys are the option names
+// of 'estlab filter' (q-diag, r-diag, filter, x0, ...); with noise_prefix
+// "init-" the noise keys become the tuner's initial values (q-diag ->
+// init-q-diag). What the command line gives wins: an option given there is
+// kept, and a Q (or R) option on the command line replaces every Q (R)
+// option of the file. Earlier files win over later ones. Throws InputError
+// naming the file for an unreadable file, an unknown key or a bad value.
+void MergeConfigFiles(boost::program_options::variables_map* vm,
+                      const std::string& noise_prefix = "");
+
 // Builds and validates the spec (throws InputError naming the option).
-FilterSpec BuildFilterSpec(const boost::program_options::variables_map& vm,
-                           const ModelEntry& model, const std::string& noise_prefix = "");
+FilterSpec BuildFilterSpec(const boost::program_options::variables_map& vm, const ModelEntry& model,
+                           const std::string& noise_prefix = "");
 
 // Reads a data CSV for `model` and measurement `meas`: column t, the
 // z_<output> columns (renamed by --column ours=theirs), truth columns named

@@ -34,8 +34,8 @@ constexpr const char* kExamples = R"(Examples:
       --validate valid.csv --out tuned.ini
   # then filter with the tuned noise:
   estlab filter --model pendulum --measure sin --filter ekf --integrator rk4 --data valid.csv \
-      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 $(sed -n 's/^\([a-z-]*\) = \(.*\)/--\1 \2/p' tuned.ini) \
-      --out est.csv
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --config tuned.ini --out est.csv
+  # (--config tuned.ini also works here: its Q/R become the initial values.)
   # White-noise-acceleration qc and a scalar R, UKF, 4 starts, least squares, JSON:
   estlab tune --model double-pendulum --measure angles --filter ukf --alpha 1 --data a.csv \
       --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
@@ -46,8 +46,11 @@ over the innovations nu_k (covariance S_k) of every dataset after --burn-in
 updates. Parameters are log-variances (diag, scalar, white-accel's log qc) or
 a log-Cholesky factor (full); --q-param/--r-param default to the shape of the
 --init-* option given (q-white-accel -> white-accel, q -> full, q-scalar ->
-scalar, q-diag -> diag). 'fixed' keeps the initial matrix. The EKF, IEKF, UKF,
-CKF and GHKF are supported, with a fixed-step --integrator (not cvodes).
+scalar, q-diag -> diag). 'fixed' keeps the initial matrix. The KF, EKF, IEKF,
+UKF, CKF and GHKF are supported (not the PF). Gradients are exact (automatic
+differentiation through the filter) with a fixed-step --integrator; with
+cvodes they are central differences of the NLL (step 1e-4 in the log
+parameters) with CVODES run at rtol <= 1e-10, atol <= 1e-12.
 
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
@@ -410,8 +413,10 @@ int RunTune(const std::vector<std::string>& args) {
       "out", po::value<std::string>(),
       "write the tuned Q/R as 'estlab filter' options (tuned.ini)")("json", "print a JSON summary");
   AddFilterOptions(&desc, "init-");
+  AddConfigOption(&desc);
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
+  MergeConfigFiles(&vm, "init-");
   po::notify(vm);
   if (vm.count("help")) {
     std::cout << desc << "\n" << kExamples;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -102,6 +103,56 @@ TEST_F(TuneCli, TunesValidatesAndWritesAnIniThatFilterReads) {
                              vm["q-diag"].as<std::string>() + " --r-diag " +
                              vm["r-diag"].as<std::string>() + " --out est.csv");
   EXPECT_EQ(f.exit_code, 0) << f.err;
+
+  // --config tuned.ini reads the same options: the same est.csv, byte for byte.
+  const CmdResult c = Estlab(std::string("filter ") + kFilter +
+                             "--data valid.csv --config tuned.ini --out est_config.csv");
+  EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(Slurp(File("est.csv")), Slurp(File("est_config.csv")));
+  // The command line wins: --r-diag replaces the file's R (and only R).
+  const CmdResult o = Estlab(std::string("filter ") + kFilter +
+                             "--data valid.csv --config tuned.ini --r-diag 1 --out est_r1.csv");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  const CmdResult e =
+      Estlab(std::string("filter ") + kFilter + "--data valid.csv --q-diag " +
+             vm["q-diag"].as<std::string>() + " --r-diag 1 --out est_r1_explicit.csv");
+  EXPECT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(Slurp(File("est.csv")), Slurp(File("est_r1.csv")));
+  EXPECT_EQ(Slurp(File("est_r1.csv")), Slurp(File("est_r1_explicit.csv")));
+  // And `estlab tune --config tuned.ini` starts from the tuned values: the
+  // NLL at the start already equals the tuned one.
+  const CmdResult t =
+      Estlab(std::string("tune ") + kFilter + "--data train.csv --config tuned.ini --json");
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  auto number_after = [](const std::string& text, const std::string& key) {
+    const size_t at = text.find("\"" + key + "\": ");
+    return at == std::string::npos ? std::nan("") : std::stod(text.substr(at + key.size() + 4));
+  };
+  const double nll_tuned = number_after(r.out, "nll_tuned");
+  EXPECT_NEAR(number_after(t.out, "nll_initial"), nll_tuned, 1e-6 * std::abs(nll_tuned)) << t.out;
+}
+
+TEST_F(TuneCli, BadConfigFilesExitTwo) {
+  Simulate("valid.csv", 6);
+  {
+    std::ofstream bad(File("bad_key.ini"));
+    bad << "q-diag = 1e-4,1e-2\nr-diag = 0.01\nnot-an-option = 3\n";
+  }
+  {
+    std::ofstream bad(File("bad_value.ini"));
+    bad << "q-diag = 1e-4,abc\nr-diag = 0.01\n";
+  }
+  for (const char* config : {"missing.ini", "bad_key.ini", "bad_value.ini"}) {
+    const CmdResult r = Estlab(std::string("filter ") + kFilter + "--data valid.csv --config " +
+                               config + " --out est.csv");
+    EXPECT_EQ(r.exit_code, 2) << config << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: error:"), std::string::npos) << r.err;
+    EXPECT_FALSE(Exists("est.csv")) << config;
+  }
+  const CmdResult r = Estlab(std::string("filter ") + kFilter +
+                             "--data valid.csv --config bad_key.ini --out est.csv");
+  EXPECT_NE(r.err.find("not-an-option"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("bad_key.ini"), std::string::npos) << r.err;
 }
 
 TEST_F(TuneCli, WhiteAccelScalarLeastSquaresAndHumanOutput) {
@@ -128,7 +179,6 @@ TEST_F(TuneCli, BadInputExitsTwo) {
         base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --r-param white-accel",
         base + "--init-q-diag 1e-4,1e-2 --init-r '1,0;0,1' --r-param full",
         base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --init-r-scalar 1",
-        base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --integrator cvodes",
         base + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 --filter pf",
         std::string("tune ") + kFilter + "--init-q-diag 1e-4,1e-2 --init-r-diag 1"}) {
     const CmdResult r = Estlab(bad + " --out tuned.ini");

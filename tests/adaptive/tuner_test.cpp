@@ -30,6 +30,7 @@
 #include "src/core/params.h"
 #include "src/core/random.h"
 #include "src/ode/fixed_step.h"
+#include "src/ode/transition_impl.h"  // MakeTransition<Cv> for the test-only model
 #include "src/registry/registry.h"
 
 namespace estlab {
@@ -524,12 +525,13 @@ TEST(TunerInput, RejectsBadInput) {
     o.q_param = NoiseParam::kDiag;
     EXPECT_THROW(TuneCv(s, o, CvData(50, 1)), InputError);
   }
-  {  // unsupported filter and integrator
+  {  // unsupported filter; a KF operating point of the wrong length
     FilterSpec s = spec;
     s.kind = FilterKind::kPf;
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
     s = spec;
-    s.transition.integrator = Integrator::kCvodes;
+    s.kind = FilterKind::kKf;
+    s.linearize_at = {0.0, 0.0, 0.0};
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
   }
   {  // through the registry: unknown measurement
@@ -613,6 +615,216 @@ TEST(TunerDoublePendulum, ConvergesFromGuessesFarAboveAndBelow) {
   }
   EXPECT_NEAR(results[0].nll_tuned, results[1].nll_tuned, 1e-6 * std::abs(results[0].nll_tuned));
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(results[0].r[i * 5], r_true[i], 0.1 * r_true[i]);
+}
+
+}  // namespace
+}  // namespace estlab
+
+namespace estlab {
+namespace {
+
+// ---------------------------------------------------------------------------
+// 6. The linearised KF and CVODES process models.
+
+TEST(TunerKf, NllEqualsTheDoubleKfAndTheGradientIsExact) {
+  // Pendulum linearised about the bottom, angle measured, dt 0.05.
+  const ModelEntry& model = FindModel("pendulum");
+  using P = models::Pendulum;
+  const double dt = 0.05;
+  FilterData d = Simulate<P, P::Angle>(Integrator::kRk4, Vec<double, 2>(0.2, 0.0), dt, 300,
+                                       WhiteAccel<P>(0.05, dt), Mat<1, 1>::Constant(1e-3), 81);
+  d.z[11] = std::numeric_limits<double>::quiet_NaN();  // a missing measurement
+  const std::vector<FilterData> data = {d};
+  FilterSpec spec;
+  spec.params = model.ResolveParams({});
+  spec.measurement = "angle";
+  spec.kind = FilterKind::kKf;
+  spec.linearize_at = {0.0, 0.0};
+  spec.x0 = {0.2, 0.0};
+  spec.p0 = {0.01, 0.0, 0.0, 0.01};
+  spec.q = Flat<2, 2>(WhiteAccel<P>(0.05, dt) + 1e-6 * Mat<2, 2>::Identity());
+  spec.r = {2e-3};
+  TunerOptions options;
+  options.q_param = NoiseParam::kFull;
+  options.r_param = NoiseParam::kDiag;
+  const InnovationLikelihood<P, P::Angle> lik(spec, options, data);
+  double nll = 0.0;
+  ASSERT_TRUE(lik.Nll(lik.InitialTheta().data(), &nll));
+  const FilterRunOutput run = model.run_filter(spec, d);
+  ASSERT_TRUE(run.summary.ok) << run.summary.message;
+  std::printf("  kf NLL %.12f, LinearizedKf -loglik %.12f\n", nll, -run.summary.loglik);
+  EXPECT_NEAR(nll, -run.summary.loglik, 1e-10 * std::abs(nll));
+  CheckGradient(lik, 83, "kf");
+}
+
+TEST(TunerKf, EqualsTheEkfOnALinearModel) {
+  // On the constant-velocity model Euler is exact, so the EKF is the KF and
+  // both tunes must end at the same optimum.
+  const std::vector<FilterData> data = CvData(1000, 84);
+  TunerOptions options;
+  options.q_param = NoiseParam::kWhiteAccel;
+  FilterSpec spec = CvSpec(0.3, 1.5);
+  const TuneResult ekf = TuneCv(spec, options, data);
+  spec.kind = FilterKind::kKf;
+  const TuneResult kf = TuneCv(spec, options, data);
+  ASSERT_TRUE(ekf.IsSolutionUsable() && kf.IsSolutionUsable()) << kf.message;
+  std::printf("  ekf: qc %.6f R %.6f NLL %.9f   kf: qc %.6f R %.6f NLL %.9f\n", ekf.qc, ekf.r[0],
+              ekf.nll_tuned, kf.qc, kf.r[0], kf.nll_tuned);
+  EXPECT_NEAR(kf.nll_tuned, ekf.nll_tuned, 1e-9 * std::abs(ekf.nll_tuned));
+  EXPECT_NEAR(kf.theta[0], ekf.theta[0], 1e-4);
+  EXPECT_NEAR(kf.theta[1], ekf.theta[1], 1e-4);
+  EXPECT_NEAR(kf.qc, 2.0, 0.5);  // simulated qc = 2, R = 0.25
+  EXPECT_NEAR(kf.r[0], 0.25, 0.05);
+}
+
+// CVODES (rtol 1e-10) against RK4 with 50 substeps per 0.01 s (global error
+// ~1e-13 here): both are the exact flow to far below the noise, so their NLL,
+// gradient and tuned values must agree, with the CVODES gradient from
+// central differences and the RK4 one from AD.
+TEST(TunerCvodes, CentralDifferencesAgreeWithTheExactFlowGradientAndTune) {
+  using P = models::Pendulum;
+  const double dt = 0.01;
+  const std::vector<FilterData> data = {
+      Simulate<P, P::Sin>(Integrator::kRk4, Vec<double, 2>(kPi / 4, 0.0), dt, 300,
+                          WhiteAccel<P>(0.5, dt), Mat<1, 1>::Constant(0.01), 91)};
+  TunerOptions options;
+  options.q_param = NoiseParam::kWhiteAccel;
+  for (FilterKind kind : {FilterKind::kEkf, FilterKind::kUkf}) {
+    FilterSpec spec = PendulumSpec(kind, 0.1, 0.05, dt);
+    spec.alpha = 0.5;
+    spec.transition.integrator = Integrator::kRk4;
+    spec.transition.substeps = 50;
+    const InnovationLikelihood<P, P::Sin> fine(spec, options, data);
+    FilterSpec cv = spec;
+    cv.transition.integrator = Integrator::kCvodes;
+    cv.transition.substeps = 1;
+    const InnovationLikelihood<P, P::Sin> cvodes(cv, options, data);
+    ASSERT_TRUE(cvodes.UsesCvodes());
+    const tuner_internal::Objective<P, P::Sin> obj_fine(fine), obj_cvodes(cvodes);
+    Rng rng(92);
+    double worst_f = 0.0, worst_g = 0.0;
+    for (int trial = 0; trial < 5; ++trial) {
+      std::vector<double> theta = fine.InitialTheta();
+      for (double& v : theta) v += 2.0 * rng.Uniform() - 1.0;
+      double f1 = 0.0, f2 = 0.0;
+      std::vector<double> g1(2), g2(2);
+      ASSERT_TRUE(obj_fine.ValueAndGradient(theta.data(), &f1, g1.data()));
+      ASSERT_TRUE(obj_cvodes.ValueAndGradient(theta.data(), &f2, g2.data()));
+      worst_f = std::max(worst_f, std::abs(f1 - f2) / std::abs(f1));
+      for (int i = 0; i < 2; ++i) {
+        const double rel = std::abs(g1[i] - g2[i]) / std::max(std::abs(g1[i]), 1.0);
+        worst_g = std::max(worst_g, rel);
+        EXPECT_LT(rel, 1e-5) << FilterKindName(kind) << " point " << trial << " parameter " << i
+                             << ": AD (rk4) " << g1[i] << " vs central differences (cvodes) "
+                             << g2[i];
+      }
+    }
+    std::printf("  %s: NLL rel. difference <= %.2e, gradient rel. difference <= %.2e\n",
+                FilterKindName(kind), worst_f, worst_g);
+    EXPECT_LT(worst_f, 1e-8);  // measured 1.7e-10 (ekf), 2.1e-9 (ukf, 5 CVODES solves per step)
+    const TuneResult a = FindModel("pendulum").tune(spec, options, data);
+    const TuneResult b = FindModel("pendulum").tune(cv, options, data);
+    ASSERT_TRUE(a.IsSolutionUsable() && b.IsSolutionUsable()) << b.message;
+    std::printf("  %s tuned: rk4x50 qc %.6f R %.6f (%.2f s), cvodes qc %.6f R %.6f (%.2f s, %s)\n",
+                FilterKindName(kind), a.qc, a.r[0], a.wall_s, b.qc, b.r[0], b.wall_s,
+                TuneStatusName(b.status));
+    EXPECT_NEAR(b.theta[0], a.theta[0], 1e-3);
+    EXPECT_NEAR(b.theta[1], a.theta[1], 1e-3);
+    EXPECT_NEAR(b.std_errors[1], a.std_errors[1], 0.05 * a.std_errors[1]);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// 7. Held out: the tuned UKF (8 parameters, double pendulum, all four
+// states, 2000 training steps) against the oracle and paper 000's hand grid
+// (Q = q I, R = r I, q, r in {1e-4, 1e-2}) on 20 independent runs.
+
+TEST(TunerDoublePendulum, TunedRmseOnHeldOutRunsIsNearTheOracleAndBeatsTheHandGrid) {
+  const ModelEntry& model = FindModel("double-pendulum");
+  const std::vector<double> q_true = {1e-6, 1e-4, 1e-6, 1e-4};
+  const std::vector<double> r_true = {0.05 * 0.05, 0.03 * 0.03, 0.04 * 0.04, 0.02 * 0.02};
+  auto simulate = [&](uint64_t seed, FilterData* d) {
+    SimulationSpec sim;
+    sim.params = model.ResolveParams({});
+    sim.x0 = {kPi / 4, 0.0, kPi / 6, 0.0};
+    sim.dt = 0.01;
+    sim.t_end = 19.99;  // 2000 rows
+    sim.transition.integrator = Integrator::kRk4;
+    sim.process_noise_var = q_true;
+    sim.measurement = "full";
+    sim.meas_noise_var = r_true;
+    sim.seed = seed;
+    const SimulationResult s = model.simulate(sim);
+    ASSERT_TRUE(s.ok);
+    *d = FilterData();
+    d->m = 4;
+    d->has_truth = true;
+    for (const auto& row : s.rows) {
+      d->t.push_back(row[0]);
+      d->lines.push_back(long(d->t.size()) + 1);
+      for (int i = 0; i < 4; ++i) d->truth.push_back(row[1 + i]);
+      for (int j = 0; j < 4; ++j) d->z.push_back(row[5 + j]);
+    }
+  };
+  FilterData train;
+  simulate(71, &train);
+  FilterSpec spec;
+  spec.params = model.ResolveParams({});
+  spec.measurement = "full";
+  spec.kind = FilterKind::kUkf;
+  spec.alpha = 1.0;
+  spec.transition.integrator = Integrator::kRk4;
+  spec.x0 = {kPi / 4, 0.0, kPi / 6, 0.0};
+  spec.p0 = Flat<4, 4>(1e-4 * Mat<4, 4>::Identity());
+  auto diag_spec = [&](const std::vector<double>& q, const std::vector<double>& r) {
+    FilterSpec s = spec;
+    s.q = Flat<4, 4>(Mat<4, 4>::Zero());
+    s.r = Flat<4, 4>(Mat<4, 4>::Zero());
+    for (int i = 0; i < 4; ++i) s.q[i * 5] = q[i], s.r[i * 5] = r[i];
+    return s;
+  };
+  TunerOptions options;
+  const TuneResult tuned =
+      model.tune(diag_spec({1e-2, 1e-2, 1e-2, 1e-2}, {1e-2, 1e-2, 1e-2, 1e-2}), options, {train});
+  ASSERT_TRUE(tuned.IsSolutionUsable()) << tuned.message;
+
+  std::vector<std::pair<std::string, FilterSpec>> settings = {
+      {"tuned", tuned.tuned_spec}, {"oracle", diag_spec(q_true, r_true)}};
+  for (double q : {1e-4, 1e-2})
+    for (double r : {1e-4, 1e-2}) {
+      char label[64];
+      std::snprintf(label, sizeof label, "hand q=%g r=%g", q, r);
+      settings.push_back({label, diag_spec({q, q, q, q}, {r, r, r, r})});
+    }
+  // Mean over the runs of each state's RMSE, and of their root mean square.
+  std::vector<std::array<double, 5>> mean(settings.size(), std::array<double, 5>{});
+  const int runs = 20;
+  for (int run = 0; run < runs; ++run) {
+    FilterData d;
+    simulate(DeriveSeed({7100, uint64_t(run)}), &d);
+    for (size_t s = 0; s < settings.size(); ++s) {
+      const FilterRunOutput out = model.run_filter(settings[s].second, d);
+      ASSERT_TRUE(out.summary.ok) << settings[s].first << ": " << out.summary.message;
+      double ms = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        mean[s][i] += out.summary.rmse[i] / runs;
+        ms += out.summary.rmse[i] * out.summary.rmse[i] / 4;
+      }
+      mean[s][4] += std::sqrt(ms) / runs;
+    }
+  }
+  std::printf("  %-20s %10s %10s %10s %10s %10s\n", "UKF, 20 held-out", "theta1", "omega1",
+              "theta2", "omega2", "all");
+  for (size_t s = 0; s < settings.size(); ++s) {
+    std::printf("  %-20s", settings[s].first.c_str());
+    for (double v : mean[s]) std::printf(" %10.6f", v);
+    std::printf("\n");
+  }
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_LE(mean[0][i], 1.05 * mean[1][i]) << "column " << i << ": tuned vs oracle";
+    for (size_t s = 2; s < settings.size(); ++s)
+      EXPECT_LT(mean[0][i], mean[s][i]) << "column " << i << ": tuned vs " << settings[s].first;
+  }
 }
 
 }  // namespace
