@@ -2,6 +2,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -224,34 +225,53 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
   scripts->push_back(cons.Write(term, 900, 700));
 }
 
-void MeansFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
-                 const CsvText& summary, const std::string& folder, const std::string& term,
+// Mean RMSE per filter x noise with the 95 % CI of the mean, one panel per
+// state, settings on the y axis (long names stay readable), coloured by
+// their role: oracle blue, auto-tuned red, hand-tuned grey.
+void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
+                 const std::vector<ComboName>& combos, const CsvText& summary,
+                 const std::string& folder, const std::string& term,
                  std::vector<std::string>* scripts) {
   const auto& states = sc.model->states;
   Figure fig(folder, sc.name + "_rmse_means");
   const int mc = summary.Column("metric"), mean = summary.Column("mean");
   const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
+  auto role_color = [&](const std::string& noise) {
+    for (const auto& n : c.noises)
+      if (n.name == noise) return n.role == "oracle" ? 0 : n.role == "tuned" ? 1 : 2;
+    return 2;
+  };
   for (const auto& s : states) {
-    fig.dat() << "# rmse_" << s << ": index label mean ci95_lo ci95_hi\n";
+    fig.dat() << "# rmse_" << s
+              << ": index label mean ci95_lo ci95_hi role(0 oracle, 1 tuned, 2 hand)\n";
     for (size_t k = 0; k < combos.size(); ++k)
       for (const auto& r : summary.rows)
         if (r[0] == sc.name && r[1] == combos[k].filter && r[2] == combos[k].noise &&
             r[mc] == "rmse_" + s)
           fig.dat() << k << " \"" << combos[k].label() << "\" " << DatValue(r[mean]) << " "
-                    << DatValue(r[lo]) << " " << DatValue(r[hi]) << "\n";
+                    << DatValue(r[lo]) << " " << DatValue(r[hi]) << " "
+                    << role_color(combos[k].noise) << "\n";
     fig.dat() << "\n\n";
   }
+  size_t longest = 8;
+  for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
-  b << "  set multiplot layout 1," << states.size() << " title "
-    << Quote(sc.name + ": mean RMSE over runs with 95 % CI of the mean") << "\n"
-    << "  set xrange [-0.5:" << double(combos.size()) - 0.5 << "]\n"
-    << "  set xtics rotate by -30\n  unset key\n";
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name +
+             ": mean RMSE over runs with 95 % CI of the mean "
+             "(blue oracle, red auto-tuned, grey hand-tuned)")
+    << "\n"
+    << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
+    << "  set lmargin " << longest + 3 << "\n  unset key\n"
+    << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
+    << "  set cbrange [0:2]\n  unset colorbox\n";
   for (size_t i = 0; i < states.size(); ++i)
-    b << "  set ylabel " << Quote(Label(sc.model->name, "mean RMSE " + states[i])) << "\n  plot "
+    b << "  set xlabel " << Quote(Label(sc.model->name, "mean RMSE " + states[i])) << "\n  plot "
       << Quote(fig.dat_name()) << " index " << i
-      << " using 1:3:4:5:xticlabels(2) with yerrorbars pt 7 ps 1.2 lc rgb '" << Color(0) << "'\n";
+      << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
-  scripts->push_back(fig.Write(term, 420 * int(states.size()) + 100, 450));
+  const int panel = 22 * int(combos.size()) + 90;
+  scripts->push_back(fig.Write(term, 900, panel * int(states.size()) + 40));
 }
 
 // The filters' own standard deviation sqrt(P_ii) over time in one kept run
@@ -341,7 +361,8 @@ void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::strin
     b << "  set multiplot layout " << (states.size() + 1) / 2 << ",2 title "
       << Quote(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
       << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n  set logscale y\n"
-      << "  set xlabel " << Quote(key) << "\n  set key top left\n";
+      << "  set xlabel " << Quote(key + " (scenario label)")
+      << "\n  set xtics rotate by -40\n  set key inside top left\n";
     for (size_t i = 0; i < states.size(); ++i) {
       b << "  set ylabel " << Quote(Label(first.model->name, "RMSE " + states[i])) << "\n  plot ";
       for (size_t j = 0; j < combos.size(); ++j) {
@@ -403,7 +424,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
       }
     }
     TimeFigures(sc, combos, tm, out.folder, term, &out.scripts);
-    MeansFigure(sc, combos, summary, out.folder, term, &out.scripts);
+    MeansFigure(config, sc, combos, summary, out.folder, term, &out.scripts);
   }
   SweepFigures(config, summary, out.folder, term, &out.scripts);
 

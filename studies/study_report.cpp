@@ -461,8 +461,12 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
           (k.hand_is_oracle ? " That hand setting is the truth's own noise, so the tuner can at "
                               "best tie it."
                             : "") +
-          (!worst.empty() && k.auto_score <= 1.1
-               ? " Auto loses on " + worst + " the oracle, where a hand setting does better."
+          (k.has_oracle && k.hand_score < 1.0 && !k.hand_is_oracle
+               ? " The hand setting beats the truth's own noise (score < 1): the filter's "
+                 "process model is wrong (e.g. a coarse fixed-step integrator), its error acts "
+                 "as extra, time-correlated process noise, and larger hand Q/R absorb it better "
+                 "than the Q/R that maximise the likelihood of a white-noise model, which land "
+                 "near the oracle."
                : "") +
           tuner);
     }
