@@ -257,9 +257,7 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name +
-             ": mean RMSE over runs with 95 % CI of the mean "
-             "(blue oracle, red auto-tuned, grey hand-tuned)")
+    << Quote(sc.name + ": mean RMSE, 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
     << "  set lmargin " << longest + 3 << "\n  unset key\n"
