@@ -472,7 +472,7 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
     }
   }
   if (misses.empty()) {
-    md << "Both targets hold in every case.\n\n";
+    md << "Both targets hold in every case where they apply.\n\n";
   } else {
     md << "Where a target is missed:\n\n";
     for (const auto& m : misses) md << "- " << m << "\n";

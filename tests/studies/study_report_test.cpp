@@ -152,6 +152,15 @@ TEST(StudyReport, HandAutoOracleSectionAndMseTable) {
   EXPECT_NE(report.find("| rmse_theta mean paper | estlab | rmse_theta var paper | estlab |"),
             std::string::npos);
 
+  // A hand setting equal to the truth's noise is marked as the oracle.
+  std::string same = Replace(TinyStudy(3, 25, 100, /*tuned=*/true),
+                             "[noise.hand]\nq-diag = 1e-3,1e-2\nr-diag = 0.02\n",
+                             "[noise.hand]\nq-white-accel = 0.5\nr-diag = 0.01\n");
+  WriteText(dir.File("same.ini"), same);
+  ASSERT_EQ(RunEstlab("study same.ini --out same --jobs 2 --quiet", dir.path()).exit_code, 0);
+  EXPECT_NE(ReadFile(dir.File("same/report.md")).find("| pend | ekf | `hand` (= oracle) |"),
+            std::string::npos);
+
   std::string poisson = Replace(TinyStudy(3), "meas-noise-var = 0.01\n",
                                 "meas-noise-var = 0.05\nmeas-noise = poisson\n");
   WriteText(dir.File("p.ini"), poisson);
@@ -159,6 +168,28 @@ TEST(StudyReport, HandAutoOracleSectionAndMseTable) {
   ASSERT_EQ(p.exit_code, 0) << p.err;
   EXPECT_NE(ReadFile(dir.File("p/report.md")).find("Poisson counts with lambda [0.05]"),
             std::string::npos);
+}
+
+// A section expanded over one key into >= 3 scenarios gets an RMSE-vs-key
+// figure; every kept run a sigma-over-time figure; axis labels carry units.
+TEST(StudyFigures, SweepSigmaAndUnits) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  TempDir dir;
+  const std::string text =
+      Replace(TinyStudy(3), "meas-noise-var = 0.01\n", "meas-noise-var = 0.01 | 0.02 | 0.04\n");
+  WriteText(dir.File("s.ini"), text);
+  ASSERT_EQ(RunEstlab("study s.ini --out r --quiet", dir.path()).exit_code, 0);
+  const auto f = RunEstlab("figures r --no-render", dir.path());
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_TRUE(dir.Exists("r/figures/pend_rmse_vs_meas-noise-var.gp"));
+  EXPECT_TRUE(dir.Exists("r/figures/pend_rmse_vs_meas-noise-var.dat"));
+  EXPECT_TRUE(dir.Exists("r/figures/pend.0.01_sigma_run0.gp"));
+  const std::string gp = ReadFile(dir.File("r/figures/pend.0.01_rmse_time.gp"));
+  EXPECT_NE(gp.find("RMSE theta [rad]"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("RMSE omega [rad/s]"), std::string::npos) << gp;
+  // The sweep's data: one block per state x filter x noise, three levels each.
+  const std::string dat = ReadFile(dir.File("r/figures/pend_rmse_vs_meas-noise-var.dat"));
+  EXPECT_NE(dat.find("2 \"0.04\" "), std::string::npos) << dat;
 }
 
 }  // namespace
