@@ -164,8 +164,11 @@ TEST(StudyReport, HandAutoOracleSectionAndMseTable) {
   std::string poisson = Replace(TinyStudy(3), "meas-noise-var = 0.01\n",
                                 "meas-noise-var = 0.05\nmeas-noise = poisson\n");
   WriteText(dir.File("p.ini"), poisson);
-  const auto p = RunEstlab("study p.ini --out p --quiet", dir.path());
+  const auto p = RunEstlab("study p.ini --out p --jobs 1 --quiet", dir.path());
   ASSERT_EQ(p.exit_code, 0) << p.err;
+  // The counts come from each run's own stream: --jobs does not change them.
+  ASSERT_EQ(RunEstlab("study p.ini --out p2 --jobs 2 --quiet", dir.path()).exit_code, 0);
+  EXPECT_EQ(ReadFile(dir.File("p/runs.csv")), ReadFile(dir.File("p2/runs.csv")));
   EXPECT_NE(ReadFile(dir.File("p/report.md")).find("Poisson counts with lambda [0.05]"),
             std::string::npos);
 }
