@@ -147,7 +147,7 @@ std::vector<Section> Scan(const std::string& text, const ConfigErrors& err) {
 
 const std::vector<std::string> kStudyKeys = {
     "name", "description", "seed", "runs", "jobs", "keep-runs", "step-metrics-every"};
-const std::vector<std::string> kReportKeys = {"paper", "title"};
+const std::vector<std::string> kReportKeys = {"paper", "title", "tables", "overview"};
 const std::vector<std::string> kReportRepeatedKeys = {"reference", "claim", "note"};
 const std::vector<std::string> kScenarioKeys = {"model",
                                                 "params",
@@ -164,29 +164,19 @@ const std::vector<std::string> kScenarioKeys = {"model",
                                                 "process-noise",
                                                 "measurement",
                                                 "meas-noise-var",
+                                                "meas-noise",
                                                 "measure-at-t0",
                                                 "prior-x0",
                                                 "prior-p0-diag",
                                                 "prior-p0",
                                                 "input",
                                                 "description"};
-const std::vector<std::string> kNoiseKeys = {"q",
-                                             "q-diag",
-                                             "q-white-accel",
-                                             "r",
-                                             "r-diag",
-                                             "scenarios",
-                                             "filters",
-                                             "description",
-                                             "init-q-diag",
-                                             "init-q",
-                                             "init-q-white-accel",
-                                             "init-r-diag",
-                                             "init-r",
-                                             "q-param",
-                                             "r-param",
-                                             "tune-datasets",
-                                             "tune-starts",
+const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-white-accel",
+                                             "r",           "r-diag",        "scenarios",
+                                             "filters",     "description",   "role",
+                                             "init-q-diag", "init-q",        "init-q-white-accel",
+                                             "init-r-diag", "init-r",        "q-param",
+                                             "r-param",     "tune-datasets", "tune-starts",
                                              "tune-burn-in"};
 
 // `estlab filter` options that describe the data, the model or the noise
@@ -577,6 +567,19 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   }
   sc.oracle_r.assign(m * m, 0.0);
   for (int j = 0; j < m; ++j) sc.oracle_r[j * m + j] = truth.meas_noise_var[j];
+  if (v.Has("meas-noise")) {
+    const std::string kind = get("meas-noise")->text;
+    if (kind == "poisson") {
+      // The counts' variance is lambda, so the oracle R stays diag(lambda);
+      // their mean lambda is a bias no filter here models (as in paper 004).
+      sc.poisson_meas = true;
+      sc.poisson_lambda = truth.meas_noise_var;
+      truth.meas_noise_var.assign(m, 0.0);
+      sc.truth_description += ", Poisson measurement counts";
+    } else if (kind != "gaussian") {
+      v.Fail("meas-noise", "expected gaussian or poisson, got '" + kind + "'");
+    }
+  }
   if (v.Has("measure-at-t0"))
     sc.measure_at_t0 = Checked(*get("measure-at-t0"), err,
                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
@@ -688,12 +691,21 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   // Q and R: the noise section's keys, or placeholders replaced below.
   // `tuned` starts from the init-q-* / init-r-* key, else from the oracle.
   bool q_oracle = false, r_oracle = false, q_tuned = false, r_tuned = false;
+  bool r_oracle_std = false;
   std::string q_shape, r_shape;  // the key that gave the (initial) matrix
   for (const char* key : {"q", "q-diag", "q-white-accel", "r", "r-diag"}) {
     const Value* val = noise.Get(key);
     if (!val) continue;
     const std::string k = key;
     const std::string which = k.substr(0, 1);
+    if (val->text == "oracle-std") {
+      // Paper 003's sweep: R = diag(std) instead of diag(std^2).
+      if (k != "r") noise.Fail(k, "'oracle-std' goes in key r");
+      r_oracle = r_oracle_std = true;
+      r_shape = "r-diag";
+      add("r-diag", JoinDoubles(std::vector<double>(m, 1.0)), val);
+      continue;
+    }
     if (val->text == "oracle" || val->text == "tuned") {
       if (k != which) noise.Fail(k, "'" + val->text + "' goes in key " + which);
       const bool tuned = val->text == "tuned";
@@ -770,13 +782,15 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   }
   if (r_oracle) {
     for (int j = 0; j < m; ++j) {
-      if (!(sc.truth.meas_noise_var[j] > 0)) {
+      if (!(sc.oracle_r[j * m + j] > 0)) {
         noise.Fail("r", "the oracle R of [" + sc.section +
                             "] is singular: its meas-noise-var is 0 for output '" +
                             model.FindMeasurement(sc.truth.measurement).outputs[j] + "'");
       }
     }
     spec.r = sc.oracle_r;
+    if (r_oracle_std)
+      for (double& x : spec.r) x = std::sqrt(x);
   }
   spec.has_t0 = !sc.measure_at_t0;
   spec.t0 = 0.0;
@@ -832,6 +846,7 @@ std::string NoiseDescription(const SectionValues& noise) {
       if (!noise.Has(key)) continue;
       const std::string& v = noise.Get(key)->text;
       if (v == "oracle") return std::string("oracle");
+      if (v == "oracle-std") return std::string("diag(sqrt(oracle variance)) (paper 003's R)");
       if (v != "tuned") return key + " " + v;
       std::string out = "tuned";
       if (noise.Has(which + "-param")) out += " (" + noise.Get(which + "-param")->text + ")";
@@ -903,8 +918,9 @@ const std::set<std::string> kReferenceStats = {"mean", "var", "std", "median"};
 
 bool MetricExists(const StudyConfig& c, const std::string& metric) {
   if (metric == "mean_nees" || metric == "mean_nis" || metric == "loglik") return true;
+  // mse_STATE is derived in the report (the square of each run's RMSE).
   for (const auto& s : c.state_columns)
-    if (metric == "rmse_" + s || metric == "mae_" + s) return true;
+    if (metric == "rmse_" + s || metric == "mae_" + s || metric == "mse_" + s) return true;
   return false;
 }
 
@@ -930,6 +946,30 @@ void ParseReport(const Section& sec, const po::variables_map& vm, StudyConfig* c
   const SectionValues v(sec, vm, err);
   if (v.Has("paper")) c->paper = v.Get("paper")->text;
   if (v.Has("title")) c->title = v.Get("title")->text;
+  if (v.Has("tables")) {
+    c->tables = Checked(*v.Get("tables"), err, [](const std::string& t) {
+      std::vector<std::string> out;
+      for (const auto& part : Split(t, ',')) {
+        const std::string k = Trim(part);
+        if (k != "rmse" && k != "mse" && k != "mae")
+          throw InputError("tables: expected rmse, mse or mae, got '" + k + "'");
+        out.push_back(k);
+      }
+      return out;
+    });
+  }
+  if (v.Has("overview") && Trim(v.Get("overview")->text) == "none") {
+    c->overview = {"none"};  // no overview table
+  } else if (v.Has("overview")) {
+    for (const auto& part : Split(v.Get("overview")->text, ',')) {
+      const std::string metric = Trim(part);
+      if (metric != "us_per_step" && !MetricExists(*c, metric))
+        v.Fail("overview", "unknown metric '" + metric +
+                               "' (rmse_STATE, mse_STATE, mae_STATE, "
+                               "mean_nees, mean_nis, loglik)");
+      c->overview.push_back(metric);
+    }
+  }
   auto repeated = [&](const std::string& key) {
     const std::string full = sec.full + "." + key;
     return vm.count(full) ? vm[full].as<std::vector<std::string>>() : std::vector<std::string>{};
@@ -1067,6 +1107,15 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
           "noise; q = tuned: the likelihood tuner)");
     if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
     nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
+    auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
+    nc.role = text_of("q") == "tuned" || text_of("r") == "tuned"     ? "tuned"
+              : text_of("q") == "oracle" && text_of("r") == "oracle" ? "oracle"
+                                                                     : "hand";
+    if (v.Has("role")) {
+      nc.role = v.Get("role")->text;
+      if (nc.role != "hand" && nc.role != "tuned" && nc.role != "oracle" && nc.role != "other")
+        v.Fail("role", "expected hand, tuned, oracle or other, got '" + nc.role + "'");
+    }
     if (v.Has("scenarios"))
       nc.scenarios = Checked(*v.Get("scenarios"), err,
                              [](const std::string& t) { return ParseNameList(t, "scenarios"); });

@@ -36,6 +36,8 @@
 //                                    #   | matrix a,b;c,d  (per-step covariance)
 //   measurement = sin                # measurement name of the model (required)
 //   meas-noise-var = 0.09            # one variance per output (default 0)
+//   meas-noise = gaussian            # gaussian (default) | poisson: Poisson counts
+//                                    #   with lambda = meas-noise-var (paper 004)
 //   measure-at-t0 = false            # true: also a measurement at t = 0
 //   prior-x0 = theta=0.785398        # filter prior mean (default: x0)
 //   prior-p0-diag = 0.1,0.1          # or prior-p0 = a,b;c,d (default I)
@@ -59,7 +61,9 @@
 //
 //   [noise.NAME]                     # Q/R settings, each filter runs with each
 //   q = oracle                       # oracle = the truth's noise
-//   r = oracle
+//   r = oracle                       # (r = oracle-std: R = diag(sqrt(var)), paper
+//                                    #  003's defect, for paper-faithful runs only)
+//   role = hand                      # hand | tuned | oracle | other (default: inferred)
 //   # or, as in `estlab filter`: q-diag | q (matrix a,b;c,d) | q-white-accel,
 //   #   r-diag | r (matrix); exactly one Q and one R key.
 //   scenarios = a,b                  # optional: only these scenario sections
@@ -80,6 +84,8 @@
 //   reference = SCEN/FILTER/NOISE METRIC mean=0.1721 var=0.1722 | Table 1
 //   claim = rmse_theta: pf < ekf | PF has the lowest error
 //   note = free text copied into report.md (repeatable)
+//   tables = rmse,mse                # per-state tables per scenario (rmse, mse, mae)
+//   overview = mae_theta,mae_theta1  # rows of the overview over scenarios
 //
 // WARNING: the seed of run i of scenario s is DeriveSeed({seed, s, i}) with s
 // the index of the (expanded) scenario in file order: reordering scenario
@@ -140,6 +146,11 @@ struct ScenarioConfig {
   bool oracle_q_white_accel = false;
   double oracle_qc = 0.0;
   std::vector<double> oracle_r;
+  // meas-noise = poisson: the measurement noise is Poisson(lambda_j) counts
+  // (mean and variance lambda_j = meas-noise-var) added to output j, as paper
+  // 004 does; the simulator then draws none and the runner adds the counts.
+  bool poisson_meas = false;
+  std::vector<double> poisson_lambda;
   std::vector<double> prior_x0, prior_p0;
   std::vector<Combo> combos;  // filter-major, in file order
 };
@@ -153,7 +164,11 @@ struct FilterConfig {
 
 struct NoiseConfig {
   std::string name;
-  std::string description;             // "Q oracle, R diag 0.09"
+  std::string description;  // "Q oracle, R diag 0.09"
+  // Its part in the hand / auto / oracle comparison of report.md: "tuned"
+  // (q or r = tuned), "oracle" (q = r = oracle), "hand" (anything else) or
+  // "other" (kept out of it); the `role` key overrides the inferred one.
+  std::string role;
   std::vector<std::string> scenarios;  // empty = all
   std::vector<std::string> filters;    // empty = all
 };
@@ -186,6 +201,11 @@ struct StudyConfig {
   std::vector<std::string> notes;
   std::vector<ReferenceValue> references;
   std::vector<Claim> claims;
+  // [report] tables = rmse,mse,mae: the per-state tables of each scenario
+  // section (default rmse); overview = METRIC,...: the rows of the overview
+  // table over scenarios (default the RMSE of each scenario's first state).
+  std::vector<std::string> tables = {"rmse"};
+  std::vector<std::string> overview;
   // Union of the scenarios' state names, in order of first appearance: the
   // rmse_/mae_ columns of runs.csv.
   std::vector<std::string> state_columns;

@@ -2,6 +2,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -48,6 +49,25 @@ std::string ShellQuote(const std::string& s) {
 }
 
 std::string DatValue(const std::string& s) { return s.empty() ? "NaN" : s; }
+
+// "theta [rad]": the unit from the state's name. Every registered model
+// names its states x/v (m, m/s), theta/omega (rad, rad/s) with an optional
+// index; other names (van der Pol's x, y are dimensionless) get none.
+std::string Unit(const std::string& model, const std::string& state) {
+  auto starts = [&](const char* p) { return state.rfind(p, 0) == 0; };
+  if (model == "van-der-pol") return "";
+  if (starts("theta") || starts("alpha")) return "rad";
+  if (starts("omega")) return "rad/s";
+  if (state == "x") return "m";
+  if (state == "v") return "m/s";
+  return "";
+}
+std::string Label(const std::string& model, const std::string& what) {
+  // what = "RMSE theta" etc.: the unit of its last word
+  const auto sp = what.rfind(' ');
+  const std::string u = Unit(model, sp == std::string::npos ? what : what.substr(sp + 1));
+  return u.empty() ? what : what + " [" + u + "]";
+}
 
 class Figure {
  public:
@@ -121,7 +141,7 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
     << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
     const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
-    b << "  set ylabel " << Quote(states[i]) << "\n"
+    b << "  set ylabel " << Quote(Label(sc.model->name, states[i])) << "\n"
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
       << Quote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd', \\\n"
@@ -172,9 +192,9 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
   if (blocks.empty()) return;
   auto& b = rmse.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ": RMSE over time across runs") << "\n";
+    << Quote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote("RMSE " + states[i]) << "\n"
+    b << "  set ylabel " << Quote(Label(sc.model->name, "RMSE " + states[i])) << "\n"
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
     for (size_t j = 0; j < blocks.size(); ++j)
       b << (j ? ", \\\n       " : "") << Quote(rmse.dat_name()) << " index " << j
@@ -205,34 +225,155 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
   scripts->push_back(cons.Write(term, 900, 700));
 }
 
-void MeansFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
-                 const CsvText& summary, const std::string& folder, const std::string& term,
+// Mean RMSE per filter x noise with the 95 % CI of the mean, one panel per
+// state, settings on the y axis (long names stay readable), coloured by
+// their role: oracle blue, auto-tuned red, hand-tuned grey.
+void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
+                 const std::vector<ComboName>& combos, const CsvText& summary,
+                 const std::string& folder, const std::string& term,
                  std::vector<std::string>* scripts) {
   const auto& states = sc.model->states;
   Figure fig(folder, sc.name + "_rmse_means");
   const int mc = summary.Column("metric"), mean = summary.Column("mean");
   const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
+  auto role_color = [&](const std::string& noise) {
+    for (const auto& n : c.noises)
+      if (n.name == noise) return n.role == "oracle" ? 0 : n.role == "tuned" ? 1 : 2;
+    return 2;
+  };
   for (const auto& s : states) {
-    fig.dat() << "# rmse_" << s << ": index label mean ci95_lo ci95_hi\n";
+    fig.dat() << "# rmse_" << s
+              << ": index label mean ci95_lo ci95_hi role(0 oracle, 1 tuned, 2 hand)\n";
     for (size_t k = 0; k < combos.size(); ++k)
       for (const auto& r : summary.rows)
         if (r[0] == sc.name && r[1] == combos[k].filter && r[2] == combos[k].noise &&
             r[mc] == "rmse_" + s)
           fig.dat() << k << " \"" << combos[k].label() << "\" " << DatValue(r[mean]) << " "
-                    << DatValue(r[lo]) << " " << DatValue(r[hi]) << "\n";
+                    << DatValue(r[lo]) << " " << DatValue(r[hi]) << " "
+                    << role_color(combos[k].noise) << "\n";
     fig.dat() << "\n\n";
   }
+  size_t longest = 8;
+  for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
-  b << "  set multiplot layout 1," << states.size() << " title "
-    << Quote(sc.name + ": mean RMSE over runs with 95 % CI of the mean") << "\n"
-    << "  set xrange [-0.5:" << double(combos.size()) - 0.5 << "]\n"
-    << "  set xtics rotate by -30\n  unset key\n";
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name + ": mean RMSE, 95 % CI of the mean (blue oracle, red tuned, grey hand)")
+    << "\n"
+    << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
+    << "  set lmargin " << longest + 3 << "\n  unset key\n"
+    << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
+    << "  set cbrange [0:2]\n  unset colorbox\n";
   for (size_t i = 0; i < states.size(); ++i)
-    b << "  set ylabel " << Quote("mean RMSE " + states[i]) << "\n  plot " << Quote(fig.dat_name())
-      << " index " << i << " using 1:3:4:5:xticlabels(2) with yerrorbars pt 7 ps 1.2 lc rgb '"
-      << Color(0) << "'\n";
+    b << "  set xlabel " << Quote(Label(sc.model->name, "mean RMSE " + states[i])) << "\n  plot "
+      << Quote(fig.dat_name()) << " index " << i
+      << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
-  scripts->push_back(fig.Write(term, 420 * int(states.size()) + 100, 450));
+  const int panel = 22 * int(combos.size()) + 90;
+  scripts->push_back(fig.Write(term, 900, panel * int(states.size()) + 40));
+}
+
+// The filters' own standard deviation sqrt(P_ii) over time in one kept run
+// (paper 000 plots it beside the error), every filter x noise of the run.
+void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>& combos,
+                 const std::string& dir, const std::string& folder, const std::string& term,
+                 std::vector<std::string>* scripts) {
+  const auto& states = sc.model->states;
+  Figure fig(folder, sc.name + "_sigma_run" + std::to_string(run));
+  std::vector<size_t> blocks;
+  for (size_t k = 0; k < combos.size(); ++k) {
+    const std::string csv = dir + "/timeseries/" + sc.name + "/run" + std::to_string(run) + "_" +
+                            combos[k].filter + "_" + combos[k].noise + ".csv";
+    if (!fs::exists(csv)) continue;
+    const CsvTable ts = ReadCsv(csv);
+    fig.dat() << "# " << combos[k].label() << ": t";
+    for (const auto& s : states) fig.dat() << " sd_" << s;
+    fig.dat() << "\n";
+    for (const auto& row : ts.rows) {
+      fig.dat() << FormatDouble(row[0]);
+      for (const auto& s : states) {
+        // The time series keep est -+ 2 sd; the band's width is 4 sd.
+        const double sd =
+            (row[ts.ColumnIndex(s + "_hi2sd")] - row[ts.ColumnIndex(s + "_lo2sd")]) / 4.0;
+        fig.dat() << " " << (std::isfinite(sd) ? FormatDouble(sd) : "NaN");
+      }
+      fig.dat() << "\n";
+    }
+    fig.dat() << "\n\n";
+    blocks.push_back(k);
+  }
+  if (blocks.empty()) return;
+  auto& b = fig.body();
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name + ", run " + std::to_string(run) +
+             ": filter standard deviation sqrt(P) over time (log scale)")
+    << "\n  set logscale y\n";
+  for (size_t i = 0; i < states.size(); ++i) {
+    b << "  set ylabel " << Quote(Label(sc.model->name, "sd " + states[i])) << "\n"
+      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      b << (j ? ", \\\n       " : "") << Quote(fig.dat_name()) << " index " << j
+        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    b << "\n";
+  }
+  b << "  unset multiplot\n";
+  scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
+}
+
+// Mean RMSE against the one varied key of a scenario section (a noise sweep
+// such as paper 003's), with the 95 % CI of the mean, one line per filter x
+// noise. Drawn for sections expanded over exactly one key into >= 3 scenarios.
+void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::string& folder,
+                  const std::string& term, std::vector<std::string>* scripts) {
+  std::map<std::string, std::vector<const ScenarioConfig*>> sections;
+  std::vector<std::string> order;
+  for (const auto& sc : c.scenarios) {
+    if (!sections.count(sc.section)) order.push_back(sc.section);
+    sections[sc.section].push_back(&sc);
+  }
+  const int mc = summary.Column("metric"), mean = summary.Column("mean");
+  const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
+  for (const auto& section : order) {
+    const auto& scs = sections[section];
+    if (scs.size() < 3 || scs[0]->choices.size() != 1) continue;
+    const ScenarioConfig& first = *scs[0];
+    const std::string key = first.choices[0].first;
+    const auto combos = Combos(c, first);
+    const auto& states = first.model->states;
+    const std::string base = section.substr(section.find('.') + 1);
+    Figure fig(folder, base + "_rmse_vs_" + key);
+    for (const auto& s : states) {
+      for (const auto& cn : combos) {
+        fig.dat() << "# rmse_" << s << ", " << cn.label() << ": index " << key
+                  << " mean ci95_lo ci95_hi\n";
+        for (size_t k = 0; k < scs.size(); ++k)
+          for (const auto& r : summary.rows)
+            if (r[0] == scs[k]->name && r[1] == cn.filter && r[2] == cn.noise &&
+                r[mc] == "rmse_" + s)
+              fig.dat() << k << " \"" << scs[k]->choices[0].second << "\" " << DatValue(r[mean])
+                        << " " << DatValue(r[lo]) << " " << DatValue(r[hi]) << "\n";
+        fig.dat() << "\n\n";
+      }
+    }
+    auto& b = fig.body();
+    b << "  set multiplot layout " << (states.size() + 1) / 2 << ",2 title "
+      << Quote(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
+      << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n  set logscale y\n"
+      << "  set xlabel " << Quote(key + " (scenario label)")
+      << "\n  set xtics rotate by -40\n  set key inside top left\n";
+    for (size_t i = 0; i < states.size(); ++i) {
+      b << "  set ylabel " << Quote(Label(first.model->name, "RMSE " + states[i])) << "\n  plot ";
+      for (size_t j = 0; j < combos.size(); ++j) {
+        const size_t index = i * combos.size() + j;
+        b << (j ? ", \\\n       " : "") << Quote(fig.dat_name()) << " index " << index
+          << " using 1:3:4:5:xticlabels(2) with yerrorlines pt 7 ps 0.8 lw 1.5 lc rgb '" << Color(j)
+          << "' title " << Quote(combos[j].label());
+      }
+      b << "\n";
+    }
+    b << "  unset multiplot\n";
+    scripts->push_back(fig.Write(term, 1200, 380 * int((states.size() + 1) / 2) + 60));
+  }
 }
 
 }  // namespace
@@ -275,11 +416,15 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
         ++estimate_figures;
         drawn = true;
       }
-      if (drawn) break;  // the first kept run that exists
+      if (drawn) {  // the first kept run that exists
+        SigmaFigure(sc, run, combos, dir, out.folder, term, &out.scripts);
+        break;
+      }
     }
     TimeFigures(sc, combos, tm, out.folder, term, &out.scripts);
-    MeansFigure(sc, combos, summary, out.folder, term, &out.scripts);
+    MeansFigure(config, sc, combos, summary, out.folder, term, &out.scripts);
   }
+  SweepFigures(config, summary, out.folder, term, &out.scripts);
 
   if (options.render && out.message.empty()) {
     for (const auto& script : out.scripts) {

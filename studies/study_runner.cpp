@@ -144,9 +144,12 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
   file.Commit();
 }
 
-// The measurements (and truth) of a simulated trajectory, as a filter reads them.
+// The measurements (and truth) of a simulated trajectory, as a filter reads
+// them. With meas-noise = poisson the simulator drew no measurement noise and
+// the counts are added here from their own stream DeriveSeed({seed, "pois"}).
 FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth,
-                         const std::string& label) {
+                         const std::string& label, uint64_t seed) {
+  Rng poisson(DeriveSeed({seed, 0x706F6973ull}));
   const int n = int(sc.model->states.size());
   FilterData data;
   data.path = label;
@@ -157,7 +160,9 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
     data.t.push_back(row[0]);
     data.lines.push_back(long(k));
     for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
-    for (int j = 0; j < data.m; ++j) data.z.push_back(row[1 + n + j]);
+    for (int j = 0; j < data.m; ++j)
+      data.z.push_back(row[1 + n + j] +
+                       (sc.poisson_meas ? PoissonCount(poisson, sc.poisson_lambda[j]) : 0.0));
   }
   return data;
 }
@@ -183,7 +188,7 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
 
   FilterData data;
   if (truth_error.empty())
-    data = DataFromTruth(sc, truth, "scenario " + sc.name + " run " + std::to_string(run));
+    data = DataFromTruth(sc, truth, "scenario " + sc.name + " run " + std::to_string(run), seed);
 
   RunText text;
   for (const Combo& cb : sc.combos) {
@@ -318,7 +323,8 @@ std::string TuneNoise(StudyConfig* config, int jobs) {
           if (!truth.ok)
             failure = "tuning trajectory " + std::to_string(k) + ": " + truth.error;
           else
-            datasets.push_back(DataFromTruth(sc, truth, "tuning trajectory " + std::to_string(k)));
+            datasets.push_back(
+                DataFromTruth(sc, truth, "tuning trajectory " + std::to_string(k), sim.seed));
         } catch (const std::exception& e) {
           failure = "tuning trajectory " + std::to_string(k) + ": " + e.what();
         }
@@ -433,6 +439,16 @@ void AppendOrThrow(std::ofstream& file, const std::string& text, const std::stri
 }
 
 }  // namespace
+
+// Knuth's product of uniforms: exact, and fast for the small lambda of a
+// measurement-noise model.
+int PoissonCount(Rng& rng, double lambda) {
+  if (!(lambda > 0)) return 0;
+  const double limit = std::exp(-lambda);
+  int k = 0;
+  for (double p = rng.Uniform(); p > limit; p *= rng.Uniform()) ++k;
+  return k;
+}
 
 std::string StudyManifestJson(const StudyConfig& c, const StudyState& state,
                               const std::vector<std::string>& merged_from) {

@@ -27,6 +27,7 @@
 
 #include <vector>
 
+#include "src/core/random.h"
 #include "studies/study_config.h"
 #include "studies/study_results.h"
 
@@ -57,6 +58,9 @@ struct StudyRunSummary {
 
 // Throws InputError when the folder cannot be used (see the warning above).
 StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& options);
+
+// One Poisson(lambda) count from rng (meas-noise = poisson; exposed for tests).
+int PoissonCount(Rng& rng, double lambda);
 
 // manifest.json of a results folder: the configuration, seeds, library
 // versions, host and times (written by RunStudy and MergeStudies).
