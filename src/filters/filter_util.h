@@ -149,6 +149,19 @@ Mat<D, E> WeightedCrossCov(const PointsA& a_points, const Vec<double, D>& a_mean
   return C;
 }
 
+// sum_i w_i wrap(A_i - a) wrap(A_i - a)^T: WeightedCrossCov of a point set
+// with itself, each residual wrapped once.
+template <int D, std::size_t K, class Points, class Weights>
+Mat<D, D> WeightedCov(const Points& points, const Vec<double, D>& mean,
+                      const std::array<bool, K>& angles, const Weights& weights) {
+  Mat<D, D> C = Mat<D, D>::Zero();
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Vec<double, D> d = WrapResidual<D>(points.col(i) - mean, angles);
+    C.noalias() += weights(i) * d * d.transpose();
+  }
+  return C;
+}
+
 // True when every entry of the mean and the covariance is finite.
 template <int N>
 bool BeliefFinite(const Vec<double, N>& x, const Mat<N, N>& P) {

@@ -55,6 +55,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   using Params = typename Model::Params;
   using StatePoints = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   using MeasurementPoints = Eigen::Matrix<double, kM, Eigen::Dynamic>;
+  static_assert(kN <= kMaxGainStates, "StepResult::gain holds at most kMaxGainStates rows");
 
   // Throws InputError for a null transition or invalid options. All point
   // storage is allocated here, once.
@@ -97,19 +98,16 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     have_propagated_ = false;
     // X_i = x + L xi_i,  L L^T = P + jitter I
     if (!DrawPoints(x_, P_, "P + jitter I")) return FilterStatus::kFactorizationFailed;
-    // X-_i = Phi(X_i)
+    // X-_i = Phi(X_i), all points in one call (no virtual call per point)
     try {
-      for (Eigen::Index i = 0; i < points_.cols(); ++i)
-        propagated_.col(i) = transition_->Step(State(points_.col(i)), t0, t1);
+      transition_->StepPoints(points_, t0, t1, &propagated_);
     } catch (const std::exception& e) {
       return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
     }
     // x- = X-_0 + sum_i Wm_i wrap(X-_i - X-_0)
     const State x_pred = WeightedMean<kN>(propagated_, mean_weights_, Model::kAngleStates);
     // P- = sum_i Wc_i dX_i dX_i^T + Q + jitter I
-    StateCov P_pred =
-        WeightedCrossCov<kN, kN>(propagated_, x_pred, Model::kAngleStates, propagated_, x_pred,
-                                 Model::kAngleStates, cov_weights_);
+    StateCov P_pred = WeightedCov<kN>(propagated_, x_pred, Model::kAngleStates, cov_weights_);
     P_pred += Q;
     P_pred.diagonal().array() += options_.jitter;
     Symmetrize(&P_pred);
@@ -140,8 +138,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
         WeightedMean<kM>(measurement_points_, mean_weights_, Meas::kAngleOutputs);
     // S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,  C = sum_i Wc_i dY_i dZ_i^T
     MeasurementCov S =
-        WeightedCrossCov<kM, kM>(measurement_points_, z_pred, Meas::kAngleOutputs,
-                                 measurement_points_, z_pred, Meas::kAngleOutputs, cov_weights_);
+        WeightedCov<kM>(measurement_points_, z_pred, Meas::kAngleOutputs, cov_weights_);
     S += R;
     S.diagonal().array() += options_.jitter;
     Symmetrize(&S);
