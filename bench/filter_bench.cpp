@@ -5,8 +5,8 @@
 //
 //   make bench    # Release build, writes bench/results/latest.json and
 //                 # bench/results/latest.md (a short table)
-//   build/bench/estlab_bench --benchmark_filter='UKF|Floor' \
-//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build/bench/estlab_bench --benchmark_filter='UKF|Floor'
+//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one line)
 //
 // Names: <Filter>/<model>/n<states>m<outputs>/<integrator>[/particles],
 // Tuner/..., Study/<name>/jobs<k>.

@@ -165,13 +165,15 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     // log p_i = log N(wrap(z - h(x_i)); 0, R) = c - |L^-1 nu_i|^2 / 2 with
     // R = L L^T and c = -(log det R + m log 2 pi) / 2 computed once.
     const Eigen::Index n = particles_.cols();
-    const double log_norm = GaussianLogLikelihood(r_llt, Measurement::Zero(), nullptr);
+    const double log_norm =
+        GaussianLogLikelihood<kM>(r_llt, Measurement(Measurement::Zero()), nullptr);
     const auto r_lower = r_llt.matrixL();
     for (Eigen::Index i = 0; i < n; ++i) {
       predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
       const Measurement nu_i =
           WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
-      log_likelihoods_(i) = log_norm - 0.5 * r_lower.solve(nu_i).squaredNorm();
+      const Measurement whitened = r_lower.solve(nu_i);  // L^-1 nu_i
+      log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
     }
     // Predicted-measurement moments with the prior weights:
     // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)

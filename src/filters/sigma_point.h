@@ -34,6 +34,7 @@
 
 #include <exception>
 #include <string>
+#include <vector>
 
 #include "src/filters/filter.h"
 #include "src/filters/filter_util.h"
@@ -70,6 +71,20 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     mean_weights_ = unit.mean_weights;
     cov_weights_ = unit.cov_weights;
     const Eigen::Index count = unit_points_.cols();
+    // Unscented and cubature points lie on the axes (xi_i = s_i e_k): then
+    // L xi_i = s_i L e_k, a scaled column of L instead of a matrix-vector
+    // product (the same numbers: the other terms are exact zeros).
+    axis_index_.assign(count, -1);
+    axis_scale_.setZero(count);
+    axis_aligned_ = true;
+    for (Eigen::Index i = 0; i < count && axis_aligned_; ++i) {
+      for (int k = 0; k < kN; ++k) {
+        if (unit_points_(k, i) == 0.0) continue;
+        if (axis_index_[i] >= 0) axis_aligned_ = false;
+        axis_index_[i] = k;
+        axis_scale_(i) = unit_points_(k, i);
+      }
+    }
     points_.resize(kN, count);
     propagated_.resize(kN, count);
     measurement_points_.resize(kM, count);
@@ -149,7 +164,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the innovation covariance S failed");
     // K = C S^-1, i.e. K^T = S^-1 C^T
-    const Mat<kN, kM> K = llt.solve(C.transpose()).transpose();
+    const MeasurementCov S_lower = llt.matrixL();
+    const Mat<kN, kM> K = CholeskySolve<kM, kN>(S_lower, C.transpose()).transpose();
     const Measurement nu = WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
     StepResult<kM> result;
     SetInnovation(nu, S, llt, &result);
@@ -185,15 +201,23 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
                   bool add_jitter = true) {
     StateCov C = cov;
     if (add_jitter) C.diagonal().array() += options_.jitter;
-    const Eigen::LLT<StateCov> llt(C);
-    if (llt.info() != Eigen::Success || !C.allFinite()) {
+    StateCov L;
+    if (!C.allFinite() || !SmallCholesky<kN>(C, &L)) {
       Fail(FilterStatus::kFactorizationFailed,
            std::string("Cholesky of ") + what + " failed (not positive definite)");
       return false;
     }
-    const StateCov L = llt.matrixL();
-    for (Eigen::Index i = 0; i < points_.cols(); ++i)
-      points_.col(i).noalias() = mean + L * unit_points_.col(i);
+    if (axis_aligned_) {
+      for (Eigen::Index i = 0; i < points_.cols(); ++i) {
+        if (axis_index_[i] < 0)
+          points_.col(i) = mean;
+        else
+          points_.col(i).noalias() = mean + axis_scale_(i) * L.col(axis_index_[i]);
+      }
+    } else {
+      for (Eigen::Index i = 0; i < points_.cols(); ++i)
+        points_.col(i).noalias() = mean + L * unit_points_.col(i);
+    }
     return true;
   }
 
@@ -201,6 +225,9 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   Params params_;
   SigmaPointOptions options_;
   StatePoints unit_points_;
+  bool axis_aligned_ = false;    // every xi_i = axis_scale_(i) e_{axis_index_[i]}
+  std::vector<int> axis_index_;  // -1: xi_i = 0
+  Eigen::VectorXd axis_scale_;
   Eigen::VectorXd mean_weights_;
   Eigen::VectorXd cov_weights_;
   StatePoints points_;      // X_i (or Y_i after a redraw)

@@ -183,7 +183,7 @@ void ExpectNoAllocations(Filter<Model, Meas>& filter, const typename Model::Para
 
 template <class Model, class Meas>
 void CheckGaussianFilters() {
-  const typename Model::Params params;
+  const typename Model::Params params{};
   {
     KfOptions o;
     o.operating_point.assign(Model::kStateDim, 0.0);
@@ -230,7 +230,7 @@ TEST(AllocationFree, GaussianFiltersDoublePendulumRk4) {
 // The particle filter keeps its particles in storage allocated once; with
 // systematic resampling its steps do not allocate either.
 TEST(AllocationFree, ParticleFilterSystematicPendulumRk4) {
-  const Pendulum::Params params;
+  const Pendulum::Params params{};
   auto transition = Rk4<Pendulum>(params);
   ParticleOptions o;
   o.num_particles = 200;
