@@ -330,6 +330,7 @@ void RegisterAll() {
         Tuner_, guess)
         ->Unit(ms)
         ->Iterations(1)
+        ->MeasureProcessCPUTime()  // worker threads
         ->UseRealTime();
   // Studies end to end; wall time is the figure (threads).
   for (const char* study : {"paper000_noise_grid", "paper002_pendulum_mc"})
@@ -338,6 +339,7 @@ void RegisterAll() {
                         Study_, std::string(study) + ".ini", jobs)
           ->Unit(ms)
           ->Iterations(1)
+          ->MeasureProcessCPUTime()  // worker threads
           ->UseRealTime();
 }
 
