@@ -351,7 +351,10 @@ void RegisterAll() {
 // medians when repeated) written to `path` at the end.
 class TableReporter : public benchmark::ConsoleReporter {
  public:
-  explicit TableReporter(std::string path) : path_(std::move(path)) {}
+  // Colours only on a terminal (a custom display reporter does not read
+  // --benchmark_color).
+  explicit TableReporter(std::string path)
+      : ConsoleReporter(isatty(STDOUT_FILENO) ? OO_Defaults : OO_Tabular), path_(std::move(path)) {}
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
     for (const Run& r : runs) {
