@@ -1,16 +1,28 @@
-// Filter-step benchmarks (issue "Performance"): one predict + update per
-// iteration, beside the bare transition evaluations the step needs, which
-// are the arithmetic floor the filter is compared with.
+// Benchmarks of issue "Performance": filter steps (one predict + update per
+// iteration) beside the bare transition evaluations the step needs, which
+// are the arithmetic floor the filter is compared with; the likelihood tuner
+// (8-parameter double pendulum, 2000 steps); two studies end to end.
 //
-//   make bench    # Release build, writes bench/results/latest.json
+//   make bench    # Release build, writes bench/results/latest.json and
+//                 # bench/results/latest.md (a short table)
+//   build/bench/estlab_bench --benchmark_filter='UKF|Floor'
+//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one line)
 //
-// Names: <Filter>/<model>/n<states>m<outputs>/<integrator>[/particles].
+// Names: <Filter>/<model>/n<states>m<outputs>/<integrator>[/particles],
+// Tuner/..., Study/<name>/jobs<k>.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "models/double_pendulum.h"
 #include "models/pendulum.h"
@@ -19,6 +31,9 @@
 #include "src/filters/particle.h"
 #include "src/filters/sigma_point.h"
 #include "src/ode/transition_impl.h"
+#include "src/registry/registry.h"
+#include "studies/study_config.h"
+#include "studies/study_runner.h"
 
 namespace estlab {
 namespace {
@@ -157,6 +172,104 @@ void Transitions_(benchmark::State& state, int count, bool jacobian, Integrator 
   state.SetItemsProcessed(state.iterations());
 }
 
+// The tuner test's problem (tests/adaptive/tuner_test.cpp,
+// TunerDoublePendulum): 2000 RK4 steps of the double pendulum with full-state
+// measurements, UKF (alpha 1), diagonal Q and R (8 log parameters), started a
+// factor `guess` (100 or 0.01) away from the true variances. One iteration
+// is one full tune (one start); with `std_errors` false the Hessian of the
+// standard errors is skipped, leaving the time to converge (the common-scale
+// pre-search and L-BFGS).
+void Tuner_(benchmark::State& state, double guess, bool std_errors) {
+  const ModelEntry& model = FindModel("double-pendulum");
+  SimulationSpec sim;
+  sim.params = model.ResolveParams({});
+  const double pi = 3.14159265358979323846;
+  sim.x0 = {pi / 4, 0.0, pi / 6, 0.0};
+  sim.dt = 0.01;
+  sim.t_end = 19.99;  // 2000 rows
+  sim.transition.integrator = Integrator::kRk4;
+  const std::vector<double> q_true = {1e-6, 1e-4, 1e-6, 1e-4};
+  const std::vector<double> r_true = {0.05 * 0.05, 0.03 * 0.03, 0.04 * 0.04, 0.02 * 0.02};
+  sim.process_noise_var = q_true;
+  sim.measurement = "full";
+  sim.meas_noise_var = r_true;
+  sim.seed = 71;
+  const SimulationResult s = model.simulate(sim);
+  if (!s.ok || s.rows.size() != 2000u) {
+    state.SkipWithError("simulation failed");
+    return;
+  }
+  FilterData d;
+  d.m = 4;
+  for (const auto& row : s.rows) {
+    d.t.push_back(row[0]);
+    d.lines.push_back(long(d.t.size()) + 1);
+    for (int j = 0; j < 4; ++j) d.z.push_back(row[5 + j]);
+  }
+  const std::vector<FilterData> data = {d};
+  FilterSpec spec;
+  spec.params = sim.params;
+  spec.measurement = "full";
+  spec.kind = FilterKind::kUkf;
+  spec.alpha = 1.0;
+  spec.transition.integrator = Integrator::kRk4;
+  spec.x0 = sim.x0;
+  spec.p0.assign(16, 0.0);
+  for (int i = 0; i < 4; ++i) spec.p0[i * 5] = 1e-4;
+  spec.q.assign(16, 0.0);
+  spec.r.assign(16, 0.0);
+  for (int i = 0; i < 4; ++i) {
+    spec.q[i * 5] = guess * q_true[i];
+    spec.r[i * 5] = guess * r_true[i];
+  }
+  TunerOptions options;
+  options.q_param = NoiseParam::kDiag;
+  options.r_param = NoiseParam::kDiag;
+  options.compute_std_errors = std_errors;
+  int iterations = 0;
+  for (auto _ : state) {
+    const TuneResult r = model.tune(spec, options, data);
+    if (!r.IsSolutionUsable()) {
+      state.SkipWithError(("tune failed: " + r.message).c_str());
+      return;
+    }
+    iterations = r.iterations;
+    benchmark::DoNotOptimize(r.nll_tuned);
+  }
+  state.counters["lbfgs_iterations"] = iterations;
+}
+
+// A study end to end (engine API, as `estlab study CONFIG --jobs k`) into a
+// fresh temporary folder per iteration, progress off.
+void Study_(benchmark::State& state, const std::string& file, int jobs) {
+  namespace fs = std::filesystem;
+  StudyConfig config;
+  try {
+    config = LoadStudyConfig(std::string(ESTLAB_SOURCE_DIR) + "/studies/" + file);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const fs::path out =
+      fs::temp_directory_path() / ("estlab_bench_study_" + std::to_string(::getpid()));
+  long runs = 0;
+  for (auto _ : state) {
+    fs::remove_all(out);
+    StudyRunOptions options;
+    options.out_dir = out.string();
+    options.jobs = jobs;
+    options.progress = false;
+    const StudyRunSummary summary = RunStudy(config, options);
+    if (summary.finished_runs != summary.total_runs) {
+      state.SkipWithError("study did not finish");
+      break;
+    }
+    runs = summary.total_runs;
+  }
+  fs::remove_all(out);
+  state.counters["runs"] = double(runs);
+}
+
 using models::DoublePendulum;
 using models::Pendulum;
 using Cv = ConstantVelocity2d;
@@ -210,7 +323,70 @@ void RegisterAll() {
   RegisterBenchmark("Floor/double-pendulum/cvodes-with-sensitivities/x1", Transitions_<DP>, 1, true,
                     Integrator::kCvodes)
       ->Unit(us);
+  // Tuner: 8 parameters (diagonal Q and R), 2000 steps, UKF with RK4.
+  const auto ms = benchmark::kMillisecond;
+  for (bool std_errors : {true, false})
+    for (double guess : {100.0, 0.01})
+      RegisterBenchmark(
+          (std::string("Tuner/double-pendulum/ukf-rk4/diag-q-r-8-params/2000-steps/guess-x") +
+           (guess > 1 ? "100" : "0.01") + (std_errors ? "/with-std-errors" : "/converge"))
+              .c_str(),
+          Tuner_, guess, std_errors)
+          ->Unit(ms)
+          ->Iterations(1)
+          ->MeasureProcessCPUTime()  // worker threads
+          ->UseRealTime();
+  // Studies end to end; wall time is the figure (threads).
+  for (const char* study : {"paper000_noise_grid", "paper002_pendulum_mc"})
+    for (int jobs : {1, 2})
+      RegisterBenchmark((std::string("Study/") + study + "/jobs" + std::to_string(jobs)).c_str(),
+                        Study_, std::string(study) + ".ini", jobs)
+          ->Unit(ms)
+          ->Iterations(1)
+          ->MeasureProcessCPUTime()  // worker threads
+          ->UseRealTime();
 }
+
+// Console output as usual, plus a Markdown table of every run (or of the
+// medians when repeated) written to `path` at the end.
+class TableReporter : public benchmark::ConsoleReporter {
+ public:
+  // Colours only on a terminal (a custom display reporter does not read
+  // --benchmark_color).
+  explicit TableReporter(std::string path)
+      : ConsoleReporter(isatty(STDOUT_FILENO) ? OO_Defaults : OO_Tabular), path_(std::move(path)) {}
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const Run& r : runs) {
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name != "median") continue;
+      if (r.error_occurred) continue;
+      rows_.push_back(r);
+    }
+  }
+  void Finalize() override {
+    ConsoleReporter::Finalize();
+    if (path_.empty()) return;
+    // Keep medians when there are any for a benchmark, else the single run.
+    std::map<std::string, bool> has_median;
+    for (const Run& r : rows_)
+      if (r.run_type == Run::RT_Aggregate) has_median[r.run_name.str()] = true;
+    std::ofstream out(path_);
+    out << "| benchmark | real time | CPU time | iterations |\n|---|---:|---:|---:|\n";
+    for (const Run& r : rows_) {
+      if (r.run_type != Run::RT_Aggregate && has_median.count(r.run_name.str())) continue;
+      const char* unit = benchmark::GetTimeUnitString(r.time_unit);
+      char line[512];
+      std::snprintf(line, sizeof line, "| %s | %.4g %s | %.4g %s | %lld |\n",
+                    r.benchmark_name().c_str(), r.GetAdjustedRealTime(), unit,
+                    r.GetAdjustedCPUTime(), unit, static_cast<long long>(r.iterations));
+      out << line;
+    }
+  }
+
+ private:
+  std::string path_;
+  std::vector<Run> rows_;
+};
 
 }  // namespace
 
@@ -218,11 +394,24 @@ void Register() { RegisterAll(); }
 
 }  // namespace estlab
 
+// With --benchmark_out=X.json the table goes to X.md.
 int main(int argc, char** argv) {
   estlab::Register();
+  std::string table;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const std::string key = "--benchmark_out=";
+    if (a.rfind(key, 0) == 0) {
+      table = a.substr(key.size());
+      const auto dot = table.rfind(".json");
+      table = (dot == std::string::npos ? table : table.substr(0, dot)) + ".md";
+    }
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
+  estlab::TableReporter reporter(table);
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  if (!table.empty()) std::printf("table: %s\n", table.c_str());
   benchmark::Shutdown();
   return 0;
 }

@@ -54,6 +54,7 @@ class Ekf final : public FilterCommon<Model, Meas> {
   using typename Base::State;
   using typename Base::StateCov;
   using Params = typename Model::Params;
+  static_assert(kN <= kMaxGainStates, "StepResult::gain holds at most kMaxGainStates rows");
 
   // Throws InputError for a null transition or invalid options.
   Ekf(Transition<Model>* transition, const Params& params, const EkfOptions& options)

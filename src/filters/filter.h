@@ -36,6 +36,10 @@ enum class FilterStatus {
 
 const char* FilterStatusName(FilterStatus status);
 
+// Largest state dimension of a filter that reports its Kalman gain
+// (StepResult::gain has inline storage of this many rows).
+inline constexpr int kMaxGainStates = 16;
+
 // What one measurement update produced. log_likelihood is
 // log N(innovation; 0, innovation_cov) = -1/2 (log det S + nu^T S^-1 nu + m log 2 pi);
 // nis = nu^T S^-1 nu. For a particle filter, log_likelihood is
@@ -52,9 +56,11 @@ struct StepResult {
   FilterStatus status = FilterStatus::kOk;
   std::string message;  // set when status != kOk
 
-  // For the adaptive rules: the Kalman gain K and the post-fit residual
-  // z - h(x+) (zero / unset for filters that have none).
-  Mat<Eigen::Dynamic, Eigen::Dynamic> gain;
+  // For the adaptive rules: the Kalman gain K (n x M; 0 rows for filters
+  // that have none) and the post-fit residual z - h(x+) (zero when unset).
+  // The gain has inline storage for up to kMaxGainStates rows, so returning a
+  // StepResult never touches the heap (issue "Performance").
+  Eigen::Matrix<double, Eigen::Dynamic, M, Eigen::ColMajor, kMaxGainStates, M> gain;
   Vec<double, M> residual = Vec<double, M>::Zero();
 };
 
@@ -91,10 +97,17 @@ class Filter {
 };
 
 // Wraps the angle components (flags[i] true) of a residual to (-pi, pi].
+// Values already in (-pi, pi] are returned as they are (WrapAngle would return
+// them unchanged too: std::remainder is exact), without the remainder call.
+inline double WrapAngleFast(double a) {
+  constexpr double kPi = 3.14159265358979323846;
+  return (a > -kPi && a <= kPi) ? a : WrapAngle(a);
+}
+
 template <int D, std::size_t K>
 Vec<double, D> WrapResidual(Vec<double, D> r, const std::array<bool, K>& angle_flags) {
   for (int i = 0; i < D; ++i)
-    if (angle_flags[i]) r(i) = WrapAngle(r(i));
+    if (angle_flags[i]) r(i) = WrapAngleFast(r(i));
   return r;
 }
 

@@ -37,6 +37,59 @@ void Symmetrize(Mat<N, N>* P) {
   *P = (0.5 * (*P + P->transpose())).eval();
 }
 
+// Cholesky factor of a small fixed-size symmetric matrix: *L lower triangular
+// with L L^T = A, from the lower triangle of A (the column algorithm of
+// Eigen's unblocked LLT, written out for compile-time N: Eigen's LLT of a
+// 4 x 4 runs through its generic block code, ~5x the instructions). Returns
+// false when a pivot is not > 0 (not numerically positive definite, or NaN).
+template <int N>
+bool SmallCholesky(const Mat<N, N>& A, Mat<N, N>* L) {
+  Mat<N, N>& l = *L;
+  l.setZero();
+  for (int k = 0; k < N; ++k) {
+    double d = A(k, k);
+    for (int j = 0; j < k; ++j) d -= l(k, j) * l(k, j);
+    if (!(d > 0.0)) return false;
+    const double lkk = std::sqrt(d);
+    l(k, k) = lkk;
+    for (int i = k + 1; i < N; ++i) {
+      double s = A(i, k);
+      for (int j = 0; j < k; ++j) s -= l(i, j) * l(k, j);
+      l(i, k) = s / lkk;
+    }
+  }
+  return true;
+}
+
+// L^-1 b for lower-triangular L (forward substitution).
+template <int M>
+Vec<double, M> ForwardSubstitute(const Mat<M, M>& L, const Vec<double, M>& b) {
+  Vec<double, M> y;
+  for (int i = 0; i < M; ++i) {
+    double s = b(i);
+    for (int j = 0; j < i; ++j) s -= L(i, j) * y(j);
+    y(i) = s / L(i, i);
+  }
+  return y;
+}
+
+// S^-1 B for S = L L^T, L lower triangular: forward then back substitution,
+// column by column (Eigen's LLT::solve with several right-hand sides goes
+// through its blocked triangular-matrix solver).
+template <int M, int C>
+Mat<M, C> CholeskySolve(const Mat<M, M>& L, const Mat<M, C>& B) {
+  Mat<M, C> X;
+  for (int c = 0; c < C; ++c) {
+    const Vec<double, M> y = ForwardSubstitute<M>(L, B.col(c));
+    for (int i = M - 1; i >= 0; --i) {  // L^T x = y
+      double s = y(i);
+      for (int j = i + 1; j < M; ++j) s -= L(j, i) * X(j, c);
+      X(i, c) = s / L(i, i);
+    }
+  }
+  return X;
+}
+
 // S = H P H^T + R,  K = P H^T S^-1, with K^T = S^-1 (H P) solved by Cholesky
 // (S = L L^T); P is symmetric so (P H^T)^T = H P. Returns false (and leaves
 // *K unset) when S is not numerically positive definite.
@@ -49,7 +102,8 @@ bool KalmanGain(const Mat<M, N>& H, const Mat<N, N>& P, const Mat<M, M>& R, Mat<
   Symmetrize(S);
   llt->compute(*S);
   if (llt->info() != Eigen::Success) return false;
-  *K = llt->solve(HP).transpose();
+  const Mat<M, M> L = llt->matrixL();
+  *K = CholeskySolve<M, N>(L, HP).transpose();
   return K->allFinite();
 }
 
@@ -70,10 +124,11 @@ Mat<N, N> JosephUpdate(const Mat<N, N>& P, const Mat<N, M>& K, const Mat<M, N>& 
 template <int M>
 double GaussianLogLikelihood(const Eigen::LLT<Mat<M, M>>& llt, const Vec<double, M>& nu,
                              double* nis) {
-  const Vec<double, M> whitened = llt.matrixL().solve(nu);  // e = L^-1 nu
+  const Mat<M, M> L = llt.matrixL();
+  const Vec<double, M> whitened = ForwardSubstitute<M>(L, nu);  // e = L^-1 nu
   const double mahalanobis = whitened.squaredNorm();
   double log_det = 0.0;
-  for (int i = 0; i < M; ++i) log_det += 2.0 * std::log(llt.matrixL()(i, i));
+  for (int i = 0; i < M; ++i) log_det += 2.0 * std::log(L(i, i));
   if (nis != nullptr) *nis = mahalanobis;
   return -0.5 * (log_det + mahalanobis + M * kLog2Pi);
 }
@@ -145,6 +200,19 @@ Mat<D, E> WeightedCrossCov(const PointsA& a_points, const Vec<double, D>& a_mean
     const Vec<double, D> da = WrapResidual<D>(a_points.col(i) - a_mean, a_angles);
     const Vec<double, E> db = WrapResidual<E>(b_points.col(i) - b_mean, b_angles);
     C.noalias() += weights(i) * da * db.transpose();
+  }
+  return C;
+}
+
+// sum_i w_i wrap(A_i - a) wrap(A_i - a)^T: WeightedCrossCov of a point set
+// with itself, each residual wrapped once.
+template <int D, std::size_t K, class Points, class Weights>
+Mat<D, D> WeightedCov(const Points& points, const Vec<double, D>& mean,
+                      const std::array<bool, K>& angles, const Weights& weights) {
+  Mat<D, D> C = Mat<D, D>::Zero();
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Vec<double, D> d = WrapResidual<D>(points.col(i) - mean, angles);
+    C.noalias() += weights(i) * d * d.transpose();
   }
   return C;
 }

@@ -59,6 +59,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   using typename Base::State;
   using typename Base::StateCov;
   using Params = typename Model::Params;
+  static_assert(kN <= kMaxGainStates, "StepResult::gain holds at most kMaxGainStates rows");
 
   // Throws InputError for invalid options or an operating point of the wrong
   // length.

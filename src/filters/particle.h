@@ -10,6 +10,7 @@
 //   ParticleFilter<models::Pendulum, models::Pendulum::Sin> pf(transition.get(), params,
 //                                                              options);
 //   pf.Initialize(x0, P0);          // draws x_i ~ N(x0, P0), seeded by options.seed
+//                                   // (normals by the ziggurat, ziggurat.h)
 //   pf.Predict(t0, t1, Q);
 //   StepResult<1> r = pf.Update(z, R);
 //
@@ -45,6 +46,7 @@
 #include "src/core/random.h"
 #include "src/filters/filter.h"
 #include "src/filters/filter_util.h"
+#include "src/filters/ziggurat.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -96,7 +98,11 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   // storage is allocated here, once.
   ParticleFilter(Transition<Model>* transition, const Params& params,
                  const ParticleOptions& options)
-      : transition_(transition), params_(params), options_(options), rng_(options.seed) {
+      : transition_(transition),
+        params_(params),
+        options_(options),
+        rng_(options.seed),
+        normal_(&ZigguratNormal::Get()) {
     std::string error;
     if (transition_ == nullptr) throw InputError("ParticleFilter needs a transition");
     if (!options.IsValid(&error)) throw InputError(error);
@@ -132,15 +138,17 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     if (!CovarianceSqrt<kN>(Q, &LQ, &why))
       return Fail(FilterStatus::kFactorizationFailed, "process noise Q: " + why);
     const bool noisy = !Q.isZero(0.0);
-    // x_i <- Phi(x_i) + L_Q e_i
+    // x_i <- Phi(x_i) + L_Q e_i: all particles in one transition call (no
+    // virtual call per particle), then the noise in particle order.
     try {
-      for (Eigen::Index i = 0; i < particles_.cols(); ++i) {
-        particles_.col(i) = transition_->Step(State(particles_.col(i)), t0, t1);
-        if (noisy) particles_.col(i) += LQ * StandardNormal();
-      }
+      transition_->StepPoints(particles_, t0, t1, &scratch_);
     } catch (const std::exception& e) {
       return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
     }
+    particles_.swap(scratch_);
+    if (noisy)
+      for (Eigen::Index i = 0; i < particles_.cols(); ++i)
+        particles_.col(i).noalias() += LQ * StandardNormal();
     ComputeMoments();
     if (!BeliefFinite(x_, P_))
       return Fail(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
@@ -154,21 +162,25 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     if (r_llt.info() != Eigen::Success || !R.allFinite())
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the measurement noise R failed (not positive definite)");
-    // log p_i = log N(wrap(z - h(x_i)); 0, R)
+    // log p_i = log N(wrap(z - h(x_i)); 0, R) = c - |L^-1 nu_i|^2 / 2 with
+    // R = L L^T and c = -(log det R + m log 2 pi) / 2 computed once.
     const Eigen::Index n = particles_.cols();
+    const double log_norm =
+        GaussianLogLikelihood<kM>(r_llt, Measurement(Measurement::Zero()), nullptr);
+    const auto r_lower = r_llt.matrixL();
     for (Eigen::Index i = 0; i < n; ++i) {
       predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
       const Measurement nu_i =
           WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
-      log_likelihoods_(i) = GaussianLogLikelihood(r_llt, nu_i, nullptr);
+      const Measurement whitened = r_lower.solve(nu_i);  // L^-1 nu_i
+      log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
     }
     // Predicted-measurement moments with the prior weights:
     // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)
     const Measurement z_pred =
         Mean<kM>(predicted_measurements_, Meas::kAngleOutputs, Meas::Eval(x_, params_));
-    MeasurementCov S = WeightedCrossCov<kM, kM>(predicted_measurements_, z_pred,
-                                                Meas::kAngleOutputs, predicted_measurements_,
-                                                z_pred, Meas::kAngleOutputs, weight_vector());
+    MeasurementCov S =
+        WeightedCov<kM>(predicted_measurements_, z_pred, Meas::kAngleOutputs, weight_vector());
     S += R;
     Symmetrize(&S);
     const Eigen::LLT<MeasurementCov> s_llt(S);
@@ -177,18 +189,29 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
                         "Cholesky of the predicted-measurement covariance failed");
     StepResult<kM> result;
     SetInnovation(WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs), S, s_llt, &result);
-    // log_likelihood = log sum_i w_i p_i;  log w_i <- log w_i + log p_i - log_likelihood
+    // log_likelihood = log sum_i w_i p_i = m + log sum_i exp(l_i - m) with
+    // l_i = log w_i + log p_i, m = max_i l_i (log-sum-exp; one exp per
+    // particle, reused for the weights):
+    // w_i <- exp(l_i - m) / sum_j exp(l_j - m),  log w_i <- l_i - log_likelihood
     log_likelihoods_ += log_weights_;
-    const double log_lik = LogSumExp(log_likelihoods_);
-    if (!std::isfinite(log_lik))
+    const double max_l =
+        n > 0 ? log_likelihoods_.maxCoeff() : -std::numeric_limits<double>::infinity();
+    if (!std::isfinite(max_l))
       return FailResult(FilterStatus::kNonFinite,
                         "all particle likelihoods underflowed (the measurement is far from "
                         "every particle)");
+    double sum = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      weights_[i] = std::exp(log_likelihoods_(i) - max_l);
+      sum += weights_[i];
+    }
+    const double log_lik = max_l + std::log(sum);
     result.log_likelihood = log_lik;
     log_weights_ = log_likelihoods_.array() - log_lik;
+    const double inv_sum = 1.0 / sum;
     double sum_sq = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      weights_[i] = std::exp(log_weights_(i));
+      weights_[i] *= inv_sum;
       sum_sq += weights_[i] * weights_[i];
     }
     ess_ = 1.0 / sum_sq;  // ESS = 1 / sum_i w_i^2
@@ -217,7 +240,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
 
   State StandardNormal() {
     State e;
-    for (int j = 0; j < kN; ++j) e(j) = rng_.Normal();
+    for (int j = 0; j < kN; ++j) e(j) = (*normal_)(rng_);
     return e;
   }
 
@@ -257,8 +280,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   void ComputeMoments() {
     const State reference = x_;
     x_ = Mean<kN>(particles_, Model::kAngleStates, reference);
-    P_ = WeightedCrossCov<kN, kN>(particles_, x_, Model::kAngleStates, particles_, x_,
-                                  Model::kAngleStates, weight_vector());
+    P_ = WeightedCov<kN>(particles_, x_, Model::kAngleStates, weight_vector());
     Symmetrize(&P_);
   }
 
@@ -274,6 +296,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   Params params_;
   ParticleOptions options_;
   Rng rng_;
+  const ZigguratNormal* normal_;  // shared tables
   Eigen::Matrix<double, kN, Eigen::Dynamic> particles_;
   Eigen::Matrix<double, kN, Eigen::Dynamic> scratch_;
   Eigen::Matrix<double, kM, Eigen::Dynamic> predicted_measurements_;

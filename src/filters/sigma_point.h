@@ -34,6 +34,7 @@
 
 #include <exception>
 #include <string>
+#include <vector>
 
 #include "src/filters/filter.h"
 #include "src/filters/filter_util.h"
@@ -55,6 +56,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   using Params = typename Model::Params;
   using StatePoints = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   using MeasurementPoints = Eigen::Matrix<double, kM, Eigen::Dynamic>;
+  static_assert(kN <= kMaxGainStates, "StepResult::gain holds at most kMaxGainStates rows");
 
   // Throws InputError for a null transition or invalid options. All point
   // storage is allocated here, once.
@@ -69,6 +71,20 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     mean_weights_ = unit.mean_weights;
     cov_weights_ = unit.cov_weights;
     const Eigen::Index count = unit_points_.cols();
+    // Unscented and cubature points lie on the axes (xi_i = s_i e_k): then
+    // L xi_i = s_i L e_k, a scaled column of L instead of a matrix-vector
+    // product (the same numbers: the other terms are exact zeros).
+    axis_index_.assign(count, -1);
+    axis_scale_.setZero(count);
+    axis_aligned_ = true;
+    for (Eigen::Index i = 0; i < count && axis_aligned_; ++i) {
+      for (int k = 0; k < kN; ++k) {
+        if (unit_points_(k, i) == 0.0) continue;
+        if (axis_index_[i] >= 0) axis_aligned_ = false;
+        axis_index_[i] = k;
+        axis_scale_(i) = unit_points_(k, i);
+      }
+    }
     points_.resize(kN, count);
     propagated_.resize(kN, count);
     measurement_points_.resize(kM, count);
@@ -97,19 +113,16 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     have_propagated_ = false;
     // X_i = x + L xi_i,  L L^T = P + jitter I
     if (!DrawPoints(x_, P_, "P + jitter I")) return FilterStatus::kFactorizationFailed;
-    // X-_i = Phi(X_i)
+    // X-_i = Phi(X_i), all points in one call (no virtual call per point)
     try {
-      for (Eigen::Index i = 0; i < points_.cols(); ++i)
-        propagated_.col(i) = transition_->Step(State(points_.col(i)), t0, t1);
+      transition_->StepPoints(points_, t0, t1, &propagated_);
     } catch (const std::exception& e) {
       return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
     }
     // x- = X-_0 + sum_i Wm_i wrap(X-_i - X-_0)
     const State x_pred = WeightedMean<kN>(propagated_, mean_weights_, Model::kAngleStates);
     // P- = sum_i Wc_i dX_i dX_i^T + Q + jitter I
-    StateCov P_pred =
-        WeightedCrossCov<kN, kN>(propagated_, x_pred, Model::kAngleStates, propagated_, x_pred,
-                                 Model::kAngleStates, cov_weights_);
+    StateCov P_pred = WeightedCov<kN>(propagated_, x_pred, Model::kAngleStates, cov_weights_);
     P_pred += Q;
     P_pred.diagonal().array() += options_.jitter;
     Symmetrize(&P_pred);
@@ -140,8 +153,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
         WeightedMean<kM>(measurement_points_, mean_weights_, Meas::kAngleOutputs);
     // S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,  C = sum_i Wc_i dY_i dZ_i^T
     MeasurementCov S =
-        WeightedCrossCov<kM, kM>(measurement_points_, z_pred, Meas::kAngleOutputs,
-                                 measurement_points_, z_pred, Meas::kAngleOutputs, cov_weights_);
+        WeightedCov<kM>(measurement_points_, z_pred, Meas::kAngleOutputs, cov_weights_);
     S += R;
     S.diagonal().array() += options_.jitter;
     Symmetrize(&S);
@@ -152,7 +164,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the innovation covariance S failed");
     // K = C S^-1, i.e. K^T = S^-1 C^T
-    const Mat<kN, kM> K = llt.solve(C.transpose()).transpose();
+    const MeasurementCov S_lower = llt.matrixL();
+    const Mat<kN, kM> K = CholeskySolve<kM, kN>(S_lower, C.transpose()).transpose();
     const Measurement nu = WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
     StepResult<kM> result;
     SetInnovation(nu, S, llt, &result);
@@ -188,15 +201,23 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
                   bool add_jitter = true) {
     StateCov C = cov;
     if (add_jitter) C.diagonal().array() += options_.jitter;
-    const Eigen::LLT<StateCov> llt(C);
-    if (llt.info() != Eigen::Success || !C.allFinite()) {
+    StateCov L;
+    if (!C.allFinite() || !SmallCholesky<kN>(C, &L)) {
       Fail(FilterStatus::kFactorizationFailed,
            std::string("Cholesky of ") + what + " failed (not positive definite)");
       return false;
     }
-    const StateCov L = llt.matrixL();
-    for (Eigen::Index i = 0; i < points_.cols(); ++i)
-      points_.col(i).noalias() = mean + L * unit_points_.col(i);
+    if (axis_aligned_) {
+      for (Eigen::Index i = 0; i < points_.cols(); ++i) {
+        if (axis_index_[i] < 0)
+          points_.col(i) = mean;
+        else
+          points_.col(i).noalias() = mean + axis_scale_(i) * L.col(axis_index_[i]);
+      }
+    } else {
+      for (Eigen::Index i = 0; i < points_.cols(); ++i)
+        points_.col(i).noalias() = mean + L * unit_points_.col(i);
+    }
     return true;
   }
 
@@ -204,6 +225,9 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   Params params_;
   SigmaPointOptions options_;
   StatePoints unit_points_;
+  bool axis_aligned_ = false;    // every xi_i = axis_scale_(i) e_{axis_index_[i]}
+  std::vector<int> axis_index_;  // -1: xi_i = 0
+  Eigen::VectorXd axis_scale_;
   Eigen::VectorXd mean_weights_;
   Eigen::VectorXd cov_weights_;
   StatePoints points_;      // X_i (or Y_i after a redraw)

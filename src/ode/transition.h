@@ -63,9 +63,17 @@ class Transition {
   // x(t1) from x(t0) with the input held at the value of SetInput.
   virtual State Step(const State& x, double t0, double t1) = 0;
   // Same, and *flow_jacobian = dx(t1)/dx(t0).
-  virtual State StepWithJacobian(const State& x, double t0, double t1,
-                                 Jacobian* flow_jacobian) = 0;
+  virtual State StepWithJacobian(const State& x, double t0, double t1, Jacobian* flow_jacobian) = 0;
   virtual std::string Name() const = 0;
+
+  // Step() for every column of `points` (kN x L), written to the same column
+  // of *out (already L columns; not aliased with `points`). The same numbers
+  // as L calls of Step(); the fixed-step transitions override it to loop
+  // without a virtual call per point (sigma points, particles).
+  using Points = Eigen::Matrix<double, kN, Eigen::Dynamic>;
+  virtual void StepPoints(const Points& points, double t0, double t1, Points* out) {
+    for (Eigen::Index i = 0; i < points.cols(); ++i) out->col(i) = Step(points.col(i), t0, t1);
+  }
 
   void SetInput(double u) { input_ = u; }
   double input() const { return input_; }

@@ -44,6 +44,17 @@ class FixedStepTransition final : public Transition<Model> {
         },
         x, F);
   }
+  using typename Base::Points;
+  void StepPoints(const Points& points, double t0, double t1, Points* out) override {
+    const Eigen::Index count = points.cols();
+    this->stats_.internal_steps += long(substeps_) * count;
+    this->stats_.rhs_evals += long(substeps_) * RhsEvalsPerStep(scheme_) * count;
+    const double u = this->input_;
+    const Params& p = this->params_;
+    for (Eigen::Index i = 0; i < count; ++i)
+      out->col(i) =
+          FixedPropagate<Model, double>(scheme_, State(points.col(i)), t0, t1, substeps_, u, p);
+  }
   std::string Name() const override { return IntegratorName(scheme_); }
 
  private:

@@ -1,0 +1,325 @@
+// Allocation-free filter steps (issue "Performance"): global operator new and
+// delete are replaced in this test program by counting versions, and the
+// fixed-size Gaussian filters (KF, EKF, UKF, CKF, GHKF) must not allocate
+// inside Predict and Update over 1000 steps with RK4 transitions, for the
+// pendulum (n = 2, m = 1) and the double pendulum (n = 4, m = 2).
+//
+// Eigen's dynamic matrices allocate with malloc, not operator new, so malloc,
+// calloc, realloc and the aligned variants are replaced too (glibc: they
+// forward to __libc_malloc & co.; not under AddressSanitizer, which owns
+// malloc - there only operator new is counted). Every StepResult is handed
+// to a function the compiler cannot see through, so no allocation is
+// optimised away.
+//
+// This file is its own test program (perf_alloc_tests): replacing operator
+// new would otherwise count every other test's allocations too.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstddef>
+#include <cstdlib>
+#include <memory>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "models/double_pendulum.h"
+#include "models/pendulum.h"
+#include "src/filters/ekf.h"
+#include "src/filters/kalman.h"
+#include "src/filters/particle.h"
+#include "src/filters/sigma_point.h"
+#include "src/ode/transition_impl.h"
+
+namespace {
+
+// Allocations made while counting is on (any thread).
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+
+void Count() {
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+#if !defined(__SANITIZE_ADDRESS__)
+#define ESTLAB_COUNT_MALLOC 1
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+
+void* malloc(std::size_t size) noexcept {
+  Count();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t count, std::size_t size) noexcept {
+  Count();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* p, std::size_t size) noexcept {
+  Count();
+  return __libc_realloc(p, size);
+}
+void* memalign(std::size_t alignment, std::size_t size) noexcept {
+  Count();
+  return __libc_memalign(alignment, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
+  Count();
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) noexcept {
+  Count();
+  *out = __libc_memalign(alignment, size);
+  return *out != nullptr ? 0 : ENOMEM;
+}
+void free(void* p) noexcept { __libc_free(p); }
+}
+#endif
+
+namespace {
+
+// operator new: counted here, or by malloc when malloc is replaced.
+void* CountedAlloc(std::size_t size, std::size_t alignment) {
+#if !defined(ESTLAB_COUNT_MALLOC)
+  Count();
+#endif
+  if (size == 0) size = 1;
+  void* p = nullptr;
+  if (alignment <= alignof(std::max_align_t)) {
+    p = std::malloc(size);
+  } else {
+    // aligned_alloc needs a size that is a multiple of the alignment.
+    p = std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+  }
+  return p;
+}
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (void* p = CountedAlloc(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  if (void* p = CountedAlloc(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t a) {
+  if (void* p = CountedAlloc(size, std::size_t(a))) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t a) {
+  if (void* p = CountedAlloc(size, std::size_t(a))) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  return CountedAlloc(size, 0);
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  return CountedAlloc(size, 0);
+}
+void* operator new(std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return CountedAlloc(size, std::size_t(a));
+}
+void* operator new[](std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return CountedAlloc(size, std::size_t(a));
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+
+namespace estlab {
+namespace {
+
+using models::DoublePendulum;
+using models::Pendulum;
+
+constexpr int kSteps = 1000;
+constexpr double kDt = 0.01;
+
+// Counts the allocations made between construction and Stop().
+class AllocationCounter {
+ public:
+  AllocationCounter() {
+    g_allocations.store(0);
+    g_counting.store(true);
+  }
+  ~AllocationCounter() { g_counting.store(false); }
+  long Stop() {
+    g_counting.store(false);
+    return g_allocations.load();
+  }
+};
+
+template <class Model>
+Vec<double, Model::kStateDim> StartState() {
+  Vec<double, Model::kStateDim> x = Vec<double, Model::kStateDim>::Zero();
+  x(0) = 0.7;
+  if (Model::kStateDim > 2) x(2) = 0.5;
+  return x;
+}
+
+// An RK4 truth and its measurements with a deterministic wobble, computed
+// before counting starts.
+template <class Model, class Meas>
+std::vector<Vec<double, Meas::kDim>> Measurements(const typename Model::Params& params) {
+  TransitionOptions topt;
+  topt.integrator = Integrator::kRk4;
+  auto truth = MakeTransition<Model>(params, topt);
+  Vec<double, Model::kStateDim> x = StartState<Model>();
+  std::vector<Vec<double, Meas::kDim>> z;
+  z.reserve(kSteps);
+  for (int k = 0; k < kSteps; ++k) {
+    x = truth->Step(x, k * kDt, (k + 1) * kDt);
+    Vec<double, Meas::kDim> zk = Meas::template Eval<double>(x, params);
+    for (int j = 0; j < Meas::kDim; ++j) zk(j) += 0.01 * std::sin(0.37 * k + j);
+    z.push_back(zk);
+  }
+  return z;
+}
+
+// Reads the whole result where the compiler cannot see it (so a heap
+// allocation made for it, e.g. a dynamic gain, cannot be optimised away).
+template <int M>
+[[gnu::noinline]] double Consume(const StepResult<M>& r) {
+  double s = r.log_likelihood + r.nis + r.innovation.sum() + r.residual.sum();
+  for (Eigen::Index i = 0; i < r.gain.size(); ++i) s += r.gain.data()[i];
+  return s + double(r.gain.rows()) + double(r.message.size());
+}
+
+// Heap allocations inside kSteps Predict + Update calls of `filter`.
+template <class Model, class Meas>
+long AllocationsInSteps(Filter<Model, Meas>& filter, const typename Model::Params& params,
+                        std::string* failure) {
+  constexpr int N = Model::kStateDim, M = Meas::kDim;
+  const std::vector<Vec<double, M>> z = Measurements<Model, Meas>(params);
+  const Mat<N, N> Q = 1e-4 * Mat<N, N>::Identity();
+  const Mat<M, M> R = 1e-2 * Mat<M, M>::Identity();
+  filter.Initialize(StartState<Model>(), 0.01 * Mat<N, N>::Identity());
+  int failed_step = -1;
+  double log_likelihood = 0.0;
+  volatile double consumed = 0.0;
+  AllocationCounter counter;
+  for (int k = 0; k < kSteps; ++k) {
+    const FilterStatus status = filter.Predict(k * kDt, (k + 1) * kDt, Q);
+    const StepResult<M> r = filter.Update(z[k], R);
+    if ((status != FilterStatus::kOk || r.status != FilterStatus::kOk) && failed_step < 0)
+      failed_step = k;
+    log_likelihood += r.log_likelihood;
+    consumed = consumed + Consume(r);
+  }
+  const long allocations = counter.Stop();
+  if (failed_step >= 0)
+    *failure = "step " + std::to_string(failed_step) + " failed: " + filter.last_error();
+  else if (!std::isfinite(log_likelihood))
+    *failure = "log-likelihood is not finite";
+  return allocations;
+}
+
+template <class Model>
+std::unique_ptr<Transition<Model>> Rk4(const typename Model::Params& params) {
+  TransitionOptions topt;
+  topt.integrator = Integrator::kRk4;
+  return MakeTransition<Model>(params, topt);
+}
+
+template <class Model, class Meas>
+void ExpectNoAllocations(Filter<Model, Meas>& filter, const typename Model::Params& params) {
+  std::string failure;
+  const long allocations = AllocationsInSteps(filter, params, &failure);
+  EXPECT_TRUE(failure.empty()) << filter.Name() << ": " << failure;
+  EXPECT_EQ(allocations, 0) << filter.Name() << " allocated " << allocations << " times in "
+                            << kSteps << " predict + update steps";
+}
+
+template <class Model, class Meas>
+void CheckGaussianFilters() {
+  const typename Model::Params params{};
+  {
+    KfOptions o;
+    o.operating_point.assign(Model::kStateDim, 0.0);
+    LinearizedKf<Model, Meas> kf(params, o);
+    ExpectNoAllocations(kf, params);
+  }
+  {
+    auto transition = Rk4<Model>(params);
+    Ekf<Model, Meas> ekf(transition.get(), params, EkfOptions{});
+    ExpectNoAllocations(ekf, params);
+  }
+  {
+    auto transition = Rk4<Model>(params);
+    EkfOptions o;
+    o.iterations = 3;
+    Ekf<Model, Meas> iekf(transition.get(), params, o);
+    ExpectNoAllocations(iekf, params);
+  }
+  for (SigmaRule rule : {SigmaRule::kUnscented, SigmaRule::kCubature, SigmaRule::kGaussHermite}) {
+    for (auto update :
+         {SigmaPointOptions::Update::kRedraw, SigmaPointOptions::Update::kPropagate}) {
+      auto transition = Rk4<Model>(params);
+      SigmaPointOptions o;
+      o.rule = rule;
+      o.alpha = 0.5;
+      o.gh_order = 3;
+      o.update = update;
+      SigmaPointFilter<Model, Meas> filter(transition.get(), params, o);
+      SCOPED_TRACE(std::string(SigmaRuleName(rule)) +
+                   (update == SigmaPointOptions::Update::kRedraw ? " redraw" : " propagate"));
+      ExpectNoAllocations(filter, params);
+    }
+  }
+}
+
+TEST(AllocationFree, GaussianFiltersPendulumRk4) {
+  CheckGaussianFilters<Pendulum, Pendulum::Sin>();
+}
+
+TEST(AllocationFree, GaussianFiltersDoublePendulumRk4) {
+  CheckGaussianFilters<DoublePendulum, DoublePendulum::Angles>();
+}
+
+// The particle filter keeps its particles in storage allocated once; with
+// systematic resampling its steps do not allocate either.
+TEST(AllocationFree, ParticleFilterSystematicPendulumRk4) {
+  const Pendulum::Params params{};
+  auto transition = Rk4<Pendulum>(params);
+  ParticleOptions o;
+  o.num_particles = 200;
+  o.resample = ResampleScheme::kSystematic;
+  o.ess_threshold = 1.0;
+  ParticleFilter<Pendulum, Pendulum::Sin> pf(transition.get(), params, o);
+  ExpectNoAllocations(pf, params);
+}
+
+// Kept in a volatile global so the compiler cannot elide the allocation.
+std::vector<double>* volatile g_sink = nullptr;
+
+// The counter itself: an allocation inside the window is seen.
+TEST(AllocationFree, CounterSeesAnAllocation) {
+  AllocationCounter counter;
+  g_sink = new std::vector<double>(16, 1.0);
+  const long allocations = counter.Stop();
+  EXPECT_GE(allocations, 2);  // the vector object and its buffer
+  delete g_sink;
+  g_sink = nullptr;
+}
+
+}  // namespace
+}  // namespace estlab
