@@ -273,8 +273,12 @@ class InnovationLikelihood {
   Vec<double, kM> h_star_ = Vec<double, kM>::Zero();
   Mat<kM, kN> h_jacobian_ = Mat<kM, kN>::Zero();
   std::vector<KfStep> kf_steps_;
-  // CVODES process model (null for the fixed-step ones); Step() is not const.
-  std::unique_ptr<Transition<Model>> cvodes_;
+  // CVODES process model (null for the fixed-step ones), made anew for every
+  // dataset of every Run(): CVODES carries step-size history from call to
+  // call, and the NLL must be a function of theta alone for the central
+  // differences. Step() is not const, hence mutable.
+  TransitionOptions cvodes_options_;
+  mutable std::unique_ptr<Transition<Model>> cvodes_;
 };
 
 // NLL(theta), quiet NaN when the filter fails.
@@ -438,6 +442,7 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     o.atol = std::min(o.atol, kCvodesAtol);
     std::string error;
     if (!o.IsValid(&error)) throw InputError(error);
+    cvodes_options_ = o;
     cvodes_ = MakeTransition<Model>(params_, o);
   }
   if (spec.kind != FilterKind::kEkf && spec.kind != FilterKind::kKf) {
@@ -511,6 +516,7 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
 
   for (const FilterData* data : datasets_) {
     const FilterData& d = *data;
+    if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(params_, cvodes_options_);
     StateT<T> x = x0_.template cast<T>();
     StateCovT<T> P = p0_.template cast<T>();
     double t_prev = spec_.has_t0 ? spec_.t0 : d.t[0];

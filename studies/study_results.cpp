@@ -1,6 +1,7 @@
 #include "studies/study_results.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -326,6 +327,73 @@ std::string GroupKey(const std::string& s, const std::string& f, const std::stri
 
 }  // namespace
 
+namespace {
+
+// Calls visit(fields) for every complete row of a results file, as
+// ReadRowFile reads it (header checked; a last line without a newline and rows
+// of the wrong width are dropped, *dropped set) but one line at a time, so
+// that memory does not grow with the file.
+template <class Visit>
+void StreamRowFile(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
+                   Visit&& visit) {
+  *dropped = false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;
+  std::string line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (in.eof()) {  // no newline: an interrupted write
+      *dropped = true;
+      break;
+    }
+    std::vector<std::string> fields = SplitCsv(line);
+    if (header) {
+      if (fields != columns)
+        throw InputError(path + ": header differs from this study's (" + Join(columns, ",") +
+                         "); it belongs to another study or version");
+      header = false;
+      continue;
+    }
+    if (fields.size() != columns.size()) {
+      *dropped = true;
+      continue;
+    }
+    visit(fields);
+  }
+}
+
+// Puts a results file into canonical order (SortCanonical). The runner
+// appends runs in that order, so usually one streaming pass finds the file
+// already canonical and complete and leaves it alone; otherwise (shards
+// merged, an interrupted write) the file is read, sorted and rewritten.
+void Canonicalize(const StudyConfig& c, const std::string& path,
+                  const std::vector<std::string>& columns) {
+  if (!fs::exists(path)) {
+    WriteRowFile(path, columns, {});
+    return;
+  }
+  const Indexes idx(c);
+  std::array<long, 4> last = {-1, -1, -1, -1};
+  bool sorted = true, dropped = false;
+  StreamRowFile(path, columns, &dropped, [&](const std::vector<std::string>& r) {
+    const auto sc = idx.scenario.find(r[0]);
+    const auto f = idx.filter.find(r[1]);
+    const auto n = idx.noise.find(r[2]);
+    if (sc == idx.scenario.end() || f == idx.filter.end() || n == idx.noise.end())
+      throw InputError(path + ": row for " + r[0] + "/" + r[1] + "/" + r[2] +
+                       " which this study does not have");
+    const std::array<long, 4> key = {sc->second, std::stol(r[3]), f->second, n->second};
+    if (key < last) sorted = false;
+    last = key;
+  });
+  if (sorted && !dropped) return;
+  RowFile rows = ReadRowFile(path, columns);
+  SortCanonical(c, path, &rows.rows);
+  WriteRowFile(path, columns, rows.rows);
+}
+
+}  // namespace
+
 long CountFinishedRuns(const StudyConfig& config, const std::string& dir) {
   const RowFile runs = ReadRowFile(dir + "/runs.csv", RunsColumns(config));
   const Indexes idx(config);
@@ -342,36 +410,44 @@ long CountFinishedRuns(const StudyConfig& config, const std::string& dir) {
 std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
   const auto runs_cols = RunsColumns(config);
   const auto steps_cols = StepsColumns(config);
-  RowFile runs = ReadRowFile(dir + "/runs.csv", runs_cols);
-  RowFile steps = ReadRowFile(dir + "/steps.csv", steps_cols);
-  RowFile timing = ReadRowFile(dir + "/timing.csv", TimingColumns());
-  SortCanonical(config, dir + "/runs.csv", &runs.rows);
-  SortCanonical(config, dir + "/steps.csv", &steps.rows);
-  SortCanonical(config, dir + "/timing.csv", &timing.rows);
-  WriteRowFile(dir + "/runs.csv", runs_cols, runs.rows);
-  WriteRowFile(dir + "/steps.csv", steps_cols, steps.rows);
-  WriteRowFile(dir + "/timing.csv", TimingColumns(), timing.rows);
+  // The run files are streamed, never held whole: a study's memory must not
+  // grow with its number of runs (tests/perf/study_memory_test.cpp).
+  Canonicalize(config, dir + "/runs.csv", runs_cols);
+  Canonicalize(config, dir + "/steps.csv", steps_cols);
+  Canonicalize(config, dir + "/timing.csv", TimingColumns());
+  bool dropped = false;
 
   // Per-group values of every metric, runs with status ok only.
   StudyTables tables;
-  std::set<std::string> ok_runs;  // "scenario/filter/noise#run"
-  for (const auto& r : runs.rows) {
+  std::map<std::string, std::vector<char>> ok_runs;  // group -> ok flag per run index
+  auto is_ok = [&](const std::string& g, long run) {
+    const auto it = ok_runs.find(g);
+    return it != ok_runs.end() && run >= 0 && size_t(run) < it->second.size() &&
+           it->second[size_t(run)];
+  };
+  StreamRowFile(dir + "/runs.csv", runs_cols, &dropped, [&](const std::vector<std::string>& r) {
     const std::string g = GroupKey(r[0], r[1], r[2]);
     GroupValues& gv = tables.groups[g];
     ++gv.runs;
-    if (r[5] != "ok") continue;
-    ok_runs.insert(g + "#" + r[3]);
+    if (r[5] != "ok") return;
+    const long run = std::stol(r[3]);
+    std::vector<char>& flags = ok_runs[g];
+    if (run >= 0) {
+      if (flags.size() <= size_t(run)) flags.resize(size_t(run) + 1, 0);
+      flags[size_t(run)] = 1;
+    }
     ++gv.ok;
-    gv.run_index.push_back(std::stol(r[3]));
+    gv.run_index.push_back(run);
     for (size_t j = 6; j + 1 < runs_cols.size(); ++j) {
       if (runs_cols[j] == "steps") continue;
       gv.values[runs_cols[j]].push_back(ToDouble(r[j]));
     }
-  }
+  });
   if (fs::exists(dir + "/tuned.csv")) tables.tuned = ReadCsvText(dir + "/tuned.csv");
-  for (const auto& r : timing.rows) {
-    tables.groups[GroupKey(r[0], r[1], r[2])].us_per_step.push_back(ToDouble(r[4]));
-  }
+  StreamRowFile(dir + "/timing.csv", TimingColumns(), &dropped,
+                [&](const std::vector<std::string>& r) {
+                  tables.groups[GroupKey(r[0], r[1], r[2])].us_per_step.push_back(ToDouble(r[4]));
+                });
 
   // summary.csv
   {
@@ -413,9 +489,9 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
     };
     std::map<std::string, std::map<double, Acc>> acc;
     const size_t ns = config.state_columns.size();
-    for (const auto& r : steps.rows) {
+    StreamRowFile(dir + "/steps.csv", steps_cols, &dropped, [&](const std::vector<std::string>& r) {
       const std::string g = GroupKey(r[0], r[1], r[2]);
-      if (!ok_runs.count(g + "#" + r[3])) continue;
+      if (!is_ok(g, std::stol(r[3]))) return;
       Acc& a = acc[g][ToDouble(r[t_col])];
       if (a.sq.empty()) a.sq.assign(ns, 0.0);
       ++a.n;
@@ -426,7 +502,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
       const double nees = ToDouble(r[nees_col]), nis = ToDouble(r[nis_col]);
       if (std::isfinite(nees)) a.nees += nees, ++a.n_nees;
       if (std::isfinite(nis)) a.nis += nis, ++a.n_nis;
-    }
+    });
     OutputFile out(dir + "/time_metrics.csv");
     std::vector<std::string> header = {"scenario", "filter", "noise", "t", "n"};
     for (const auto& st : config.state_columns) header.push_back("rmse_" + st);
