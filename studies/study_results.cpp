@@ -151,21 +151,25 @@ CsvText ReadCsvText(const std::string& path) {
   return t;
 }
 
-RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& columns) {
-  RowFile f;
-  if (!fs::exists(path)) return f;
-  f.existed = true;
-  const std::string text = ReadAll(path);
-  size_t pos = 0;
+namespace {
+
+// Calls visit(fields) for every complete row of a results file, as
+// ReadRowFile reads it (header checked; a last line without a newline and rows
+// of the wrong width are dropped, *dropped set) but one line at a time, so
+// that memory does not grow with the file.
+template <class Visit>
+void StreamRowFile(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
+                   Visit&& visit) {
+  *dropped = false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;
+  std::string line;
   bool header = true;
-  while (pos < text.size()) {
-    const size_t nl = text.find('\n', pos);
-    if (nl == std::string::npos) {  // no newline: an interrupted write
-      f.dropped_partial = true;
+  while (std::getline(in, line)) {
+    if (in.eof()) {  // no newline: an interrupted write
+      *dropped = true;
       break;
     }
-    const std::string line = text.substr(pos, nl - pos);
-    pos = nl + 1;
     std::vector<std::string> fields = SplitCsv(line);
     if (header) {
       if (fields != columns)
@@ -175,11 +179,21 @@ RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& col
       continue;
     }
     if (fields.size() != columns.size()) {
-      f.dropped_partial = true;
+      *dropped = true;
       continue;
     }
-    f.rows.push_back(std::move(fields));
+    visit(fields);
   }
+}
+
+}  // namespace
+
+RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& columns) {
+  RowFile f;
+  if (!fs::exists(path)) return f;
+  f.existed = true;
+  StreamRowFile(path, columns, &f.dropped_partial,
+                [&](std::vector<std::string>& fields) { f.rows.push_back(std::move(fields)); });
   return f;
 }
 
@@ -328,39 +342,6 @@ std::string GroupKey(const std::string& s, const std::string& f, const std::stri
 }  // namespace
 
 namespace {
-
-// Calls visit(fields) for every complete row of a results file, as
-// ReadRowFile reads it (header checked; a last line without a newline and rows
-// of the wrong width are dropped, *dropped set) but one line at a time, so
-// that memory does not grow with the file.
-template <class Visit>
-void StreamRowFile(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
-                   Visit&& visit) {
-  *dropped = false;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return;
-  std::string line;
-  bool header = true;
-  while (std::getline(in, line)) {
-    if (in.eof()) {  // no newline: an interrupted write
-      *dropped = true;
-      break;
-    }
-    std::vector<std::string> fields = SplitCsv(line);
-    if (header) {
-      if (fields != columns)
-        throw InputError(path + ": header differs from this study's (" + Join(columns, ",") +
-                         "); it belongs to another study or version");
-      header = false;
-      continue;
-    }
-    if (fields.size() != columns.size()) {
-      *dropped = true;
-      continue;
-    }
-    visit(fields);
-  }
-}
 
 // Puts a results file into canonical order (SortCanonical). The runner
 // appends runs in that order, so usually one streaming pass finds the file
