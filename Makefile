@@ -10,6 +10,8 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 ESTLAB := $(BUILD)/estlab
 # ccache keys on paths relative to the clone, so clones share cache entries.
 export CCACHE_BASEDIR := $(CURDIR)
+# ... also for the sanitizer build (-g1): do not key on the build folder.
+export CCACHE_NOHASHDIR := 1
 
 .PHONY: all deps configure build test test-asan demo bench format clean
 
