@@ -287,35 +287,33 @@ struct Indexes {
   }
 };
 
-// Sorts rows (scenario, filter, noise, run, ...) into (scenario, run, filter,
-// noise) order, keeping the order of rows with equal keys.
+// A row's place in the canonical order: (scenario, run, filter, noise)
+// indexes, compared lexicographically. Throws InputError for a row of a
+// scenario, filter or noise the study does not have.
+using CanonicalKey = std::array<long, 4>;
+CanonicalKey RowKey(const Indexes& idx, const std::string& path,
+                    const std::vector<std::string>& r) {
+  const auto s = idx.scenario.find(r[0]);
+  const auto f = idx.filter.find(r[1]);
+  const auto n = idx.noise.find(r[2]);
+  if (s == idx.scenario.end() || f == idx.filter.end() || n == idx.noise.end())
+    throw InputError(path + ": row for " + r[0] + "/" + r[1] + "/" + r[2] +
+                     " which this study does not have");
+  return {s->second, std::stol(r[3]), f->second, n->second};
+}
+
+// Sorts rows (scenario, filter, noise, run, ...) into canonical order,
+// keeping the order of rows with equal keys.
 void SortCanonical(const StudyConfig& c, const std::string& path,
                    std::vector<std::vector<std::string>>* rows) {
   const Indexes idx(c);
-  struct Key {
-    int s, f, n;
-    long run;
-  };
-  std::vector<Key> keys;
-  for (const auto& r : *rows) {
-    const auto s = idx.scenario.find(r[0]);
-    const auto f = idx.filter.find(r[1]);
-    const auto n = idx.noise.find(r[2]);
-    if (s == idx.scenario.end() || f == idx.filter.end() || n == idx.noise.end())
-      throw InputError(path + ": row for " + r[0] + "/" + r[1] + "/" + r[2] +
-                       " which this study does not have");
-    keys.push_back({s->second, f->second, n->second, std::stol(r[3])});
-  }
+  std::vector<CanonicalKey> keys;
+  keys.reserve(rows->size());
+  for (const auto& r : *rows) keys.push_back(RowKey(idx, path, r));
   std::vector<size_t> order(rows->size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    const Key& x = keys[a];
-    const Key& y = keys[b];
-    if (x.s != y.s) return x.s < y.s;
-    if (x.run != y.run) return x.run < y.run;
-    if (x.f != y.f) return x.f < y.f;
-    return x.n < y.n;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t x, size_t y) { return keys[x] < keys[y]; });
   std::vector<std::vector<std::string>> sorted;
   sorted.reserve(rows->size());
   for (size_t i : order) sorted.push_back(std::move((*rows)[i]));
@@ -354,16 +352,10 @@ void Canonicalize(const StudyConfig& c, const std::string& path,
     return;
   }
   const Indexes idx(c);
-  std::array<long, 4> last = {-1, -1, -1, -1};
+  CanonicalKey last = {-1, -1, -1, -1};
   bool sorted = true, dropped = false;
   StreamRowFile(path, columns, &dropped, [&](const std::vector<std::string>& r) {
-    const auto sc = idx.scenario.find(r[0]);
-    const auto f = idx.filter.find(r[1]);
-    const auto n = idx.noise.find(r[2]);
-    if (sc == idx.scenario.end() || f == idx.filter.end() || n == idx.noise.end())
-      throw InputError(path + ": row for " + r[0] + "/" + r[1] + "/" + r[2] +
-                       " which this study does not have");
-    const std::array<long, 4> key = {sc->second, std::stol(r[3]), f->second, n->second};
+    const CanonicalKey key = RowKey(idx, path, r);
     if (key < last) sorted = false;
     last = key;
   });
