@@ -4,39 +4,27 @@
 //   NLL(theta) = 1/2 sum_datasets sum_{k >= burn_in}
 //                [ log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi ]
 //
-// The filters in src/filters are double-only, so this file holds a compact
-// copy of their recursions (src/filters/ekf.h, sigma_point.h: same equations,
-// same order, same wrapping and symmetrisation, so the NLL equals minus the
-// sum of their StepResult::log_likelihood) with Q(theta), R(theta) of scalar T:
-//
-//   EKF / IEKF  x- = Phi(x),  P- = F P F^T + Q,  F = dPhi/dx
-//         nu = wrap(z - h(x-)),  S = H P- H^T + R,  K = P- H^T S^-1
-//         IEKF: x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i wrap(x- - x_i))
-//         P+ = (I - K H) P- (I - K H)^T + K R K^T            (Joseph form)
-//         (nu, S of the likelihood are those at the prior, i = 0)
-//   UKF / CKF / GHKF (unit points xi_i, weights Wm_i, Wc_i of sigma_rules.h)
-//         X_i = x + L xi_i (L L^T = P + jitter I),  X-_i = Phi(X_i)
-//         x- = X-_0 + sum Wm_i wrap(X-_i - X-_0)
-//         P- = sum Wc_i wrap(X-_i - x-)(.)^T + Q + jitter I
-//         Y_i = X-_i (propagate) or x- + L- xi_i (redraw),  Z_i = h(Y_i)
-//         z^ = Z_0 + sum Wm_i wrap(Z_i - Z_0),  S = sum Wc_i dZ_i dZ_i^T + R + jitter I
-//         C = sum Wc_i wrap(Y_i - x-) dZ_i^T,  K = C S^-1,  nu = wrap(z - z^)
-//         x+ = x- + K nu,  P+ = P- - K S K^T
+// There is no second copy of the filters here: every predict and update is
+// the filter's own scalar-generic step (src/filters/ekf_step.h,
+// sigma_point_step.h, kalman_step.h), run with T = double or ceres::Jet, and
+// the time loop is the filter runs' own (src/run/step_loop.h). This file
+// only supplies what differs for a Jet: the transition Phi(x) (and its
+// Jacobian F for the EKF) through the fixed-step integrators, with Q(theta),
+// R(theta) of scalar T (noise_param.h).
 //
 //   KF    the model linearised once about x* (spec.linearize_at, else the
-//         prior mean) and discretised exactly over each step length of the data
-//         (src/filters/kalman.h, computed once in double):
-//         x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
-//         nu = wrap(z - h(x*) - H wrap(x- - x*)),  S = H P- H^T + R,  Joseph update
+//         prior mean) and discretised exactly over each step length of the
+//         data (LinearizedKf, computed once in double).
 //
 // Per update the recursion hands the whitened innovation e_k = L_k^-1 nu_k
-// (S_k = L_k L_k^T) and log det S_k = 2 sum log (L_k)_ii to a sink; the NLL
-// term is 1/2 (e_k^T e_k + log det S_k + m log 2 pi). No matrix is inverted.
+// (S_k = L_k L_k^T) and log det S_k = 2 sum log (L_k)_ii to a sink (Whiten,
+// filter_util.h); the NLL term is -GaussianLogLikelihood(e_k, log det S_k),
+// the same function the filters' StepResult::log_likelihood comes from.
 //
 // Gradients (the tuner's choice, see adaptive/tuner_impl.h): T =
 // ceres::Jet<double, C>. For the sigma-point filters that is all. The EKF's F
 // and H are Jacobians at a state that depends on theta, so with T = Jet they
-// are computed with NestedJet (adaptive/nested_jet.h): a Jet over the state of
+// are computed with NestedJet (src/ode/nested_jet.h): a Jet over the state of
 // Jets over theta, giving dF/dtheta exactly (second-order forward AD).
 //
 // Usage:
@@ -73,53 +61,24 @@
 #include <utility>
 #include <vector>
 
-#include "adaptive/nested_jet.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
+#include "src/filters/ekf_step.h"
+#include "src/filters/filter_util.h"
+#include "src/filters/gaussian_update.h"
 #include "src/filters/kalman.h"
+#include "src/filters/kalman_step.h"
+#include "src/filters/sigma_point_step.h"
 #include "src/filters/sigma_rules.h"
 #include "src/ode/fixed_step.h"
+#include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
 #include "src/registry/model_traits.h"
+#include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
+#include "src/run/step_loop.h"
 
 namespace estlab {
-
-// The Jet type that carries d/dx (N directions) on top of scalar T: a plain
-// Jet for T = double, a NestedJet for T = Jet<double, K>.
-template <class T, int N>
-struct Tangent;
-template <int N>
-struct Tangent<double, N> {
-  using type = ceres::Jet<double, N>;
-  static type Seed(double v, int i) { return type(v, i); }
-  static double Value(const type& y) { return y.a; }
-  static double Deriv(const type& y, int c) { return y.v(c); }
-};
-template <int K, int N>
-struct Tangent<ceres::Jet<double, K>, N> {
-  using Inner = ceres::Jet<double, K>;
-  using type = NestedJet<K, N>;
-  static type Seed(const Inner& v, int i) { return type(typename type::Base(v, i)); }
-  static Inner Value(const type& y) { return y.j.a; }
-  static Inner Deriv(const type& y, int c) { return y.j.v(c); }
-};
-
-// f(x) and its Jacobian df/dx for x of any scalar T (see Tangent).
-template <int Mout, int N, class T, class F>
-Eigen::Matrix<T, Mout, 1> ValueAndJacobianT(F&& f, const Eigen::Matrix<T, N, 1>& x,
-                                            Eigen::Matrix<T, Mout, N>* jacobian) {
-  using Tg = Tangent<T, N>;
-  Eigen::Matrix<typename Tg::type, N, 1> xs;
-  for (int i = 0; i < N; ++i) xs(i) = Tg::Seed(x(i), i);
-  const Eigen::Matrix<typename Tg::type, Mout, 1> y = f(xs);
-  Eigen::Matrix<T, Mout, 1> value;
-  for (int r = 0; r < Mout; ++r) {
-    value(r) = Tg::Value(y(r));
-    for (int c = 0; c < N; ++c) (*jacobian)(r, c) = Tg::Deriv(y(r), c);
-  }
-  return value;
-}
 
 template <class Model, class Meas>
 class InnovationLikelihood {
@@ -170,11 +129,9 @@ class InnovationLikelihood {
   // NLL(theta); false when the filter fails.
   template <class T>
   bool Nll(const T* theta, T* nll, std::string* why = nullptr) const {
-    const double c = 0.5 * kM * std::log(2.0 * 3.14159265358979323846);
     T sum(0.0);
     const bool ok = Run<T>(
-        theta,
-        [&](const MeasT<T>& e, const T& log_det) { sum += 0.5 * (e.squaredNorm() + log_det) + c; },
+        theta, [&](const MeasT<T>& e, const T& log_det) { sum -= GaussianLogLikelihood<kM, T>(e, log_det); },
         why);
     *nll = sum;
     return ok && ScalarFinite(sum);
@@ -186,70 +143,34 @@ class InnovationLikelihood {
     return std::isfinite(ScalarPart(v));
   }
 
-  // Sigma points chi = [x, x + gamma L_i, x - gamma L_i] (no centre for CKF).
-  template <class T>
-  bool SigmaPoints(const StateT<T>& x, const StateCovT<T>& P, bool add_jitter,
-                   std::vector<StateT<T>>* points) const;
-  // EKF gain at x: residual wrap(z - h(x)), H, S = H P H^T + R, K.
-  template <class T>
-  bool Gain(const StateT<T>& x, const StateCovT<T>& P, const Vec<double, kM>& z,
-            const MeasCovT<T>& R, MeasT<T>* residual, Eigen::Matrix<T, kM, kN>* H, MeasCovT<T>* S,
-            Eigen::LLT<MeasCovT<T>>* llt, Eigen::Matrix<T, kN, kM>* K) const;
-
   // KF: one discretisation per distinct step length of the data.
-  struct KfStep {
-    double dt;
-    Mat<kN, kN> phi;
-    Vec<double, kN> gamma, drift;
-  };
-  const KfStep* FindKfStep(double dt) const {
-    for (const KfStep& s : kf_steps_)
-      if (s.dt == dt) return &s;
+  const KfDiscretization<kN>* FindKfStep(double dt) const {
+    for (const auto& [step_dt, step] : kf_steps_)
+      if (step_dt == dt) return &step;
     return nullptr;
   }
   void SetUpKf(const std::vector<FilterData>& datasets);
-  template <class T>
-  bool PredictKf(StateT<T>* x, StateCovT<T>* P, double dt, double u, const StateCovT<T>& Q) const;
-  template <class T>
-  bool UpdateKf(StateT<T>* x, StateCovT<T>* P, const Vec<double, kM>& z, const MeasCovT<T>& R,
-                MeasT<T>* whitened, T* log_det) const;
 
+  // The belief of one run, of scalar T, and the sigma points' storage.
   template <class T>
-  bool PredictEkf(StateT<T>* x, StateCovT<T>* P, double t0, double t1, double u,
-                  const StateCovT<T>& Q) const;
+  struct Belief {
+    StateT<T> x;
+    StateCovT<T> P;
+    PointsT<T, kN> points, propagated;
+    PointsT<T, kM> measurement_points;
+    bool have_propagated = false;
+  };
   template <class T>
-  bool UpdateEkf(StateT<T>* x, StateCovT<T>* P, const Vec<double, kM>& z, const MeasCovT<T>& R,
-                 MeasT<T>* whitened, T* log_det) const;
+  bool Predict(Belief<T>* b, double t0, double t1, double u, const StateCovT<T>& Q,
+               std::string* why) const;
   template <class T>
-  bool PredictSigma(StateT<T>* x, StateCovT<T>* P, std::vector<StateT<T>>* propagated, double t0,
-                    double t1, double u, const StateCovT<T>& Q) const;
+  bool Update(Belief<T>* b, const Vec<double, kM>& z, const MeasCovT<T>& R, MeasT<T>* whitened,
+              T* log_det, std::string* why) const;
+  // x- = Phi(x) (and F = dPhi/dx when F is not null) for scalar T: the
+  // CVODES transition for double, AD through the fixed-step integrator
+  // otherwise (a nested Jet for F when T is a Jet).
   template <class T>
-  bool UpdateSigma(StateT<T>* x, StateCovT<T>* P, const std::vector<StateT<T>>* propagated,
-                   const Vec<double, kM>& z, const MeasCovT<T>& R, MeasT<T>* whitened,
-                   T* log_det) const;
-  // Innovation statistics from S (Cholesky): e = L^-1 nu, log det S.
-  template <class T>
-  static void Whiten(const Eigen::LLT<MeasCovT<T>>& llt, const MeasT<T>& nu, MeasT<T>* whitened,
-                     T* log_det) {
-    using std::log;
-    *whitened = llt.matrixL().solve(nu);
-    const MeasCovT<T> L = llt.matrixL();
-    T sum(0.0);
-    for (int i = 0; i < kM; ++i) sum += log(L(i, i));
-    *log_det = 2.0 * sum;
-  }
-  template <class T>
-  static MeasT<T> WrapOutputs(MeasT<T> v) {
-    for (int i = 0; i < kM; ++i)
-      if (Meas::kAngleOutputs[i]) v(i) = WrapAngleT(v(i));
-    return v;
-  }
-  template <class T>
-  static StateT<T> WrapStates(StateT<T> v) {
-    for (int i = 0; i < kN; ++i)
-      if (Model::kAngleStates[i]) v(i) = WrapAngleT(v(i));
-    return v;
-  }
+  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, double u, StateCovT<T>* F) const;
 
   FilterSpec spec_;
   TunerOptions options_;
@@ -261,18 +182,15 @@ class InnovationLikelihood {
   CovarianceParam<kN> q_;
   CovarianceParam<kM> r_;
   long terms_ = 0;
-  // Sigma-point rule (src/filters/sigma_rules.h): unit points xi_i of
-  // N(0, I) and their weights.
+  int iterations_ = 1;  // EKF iterations (> 1: IEKF)
+  // Sigma-point rule (src/filters/sigma_rules.h).
   bool sigma_ = false;
-  Eigen::MatrixXd unit_points_;
-  Eigen::VectorXd mean_weights_, cov_weights_;
-  // KF (see KfStep).
+  bool sigma_redraw_ = true;
+  SigmaPointSet sigma_set_;
+  // KF: the linearisation, and Phi, Gamma, d per step length of the data.
   bool kf_ = false;
-  Vec<double, kN> x_star_ = Vec<double, kN>::Zero();
-  double u_star_ = 0.0;
-  Vec<double, kM> h_star_ = Vec<double, kM>::Zero();
-  Mat<kM, kN> h_jacobian_ = Mat<kM, kN>::Zero();
-  std::vector<KfStep> kf_steps_;
+  KfLinearization<kN, kM> kf_lin_;
+  std::vector<std::pair<double, KfDiscretization<kN>>> kf_steps_;
   // CVODES process model (null for the fixed-step ones), made anew for every
   // dataset of every Run(): CVODES carries step-size history from call to
   // call, and the NLL must be a function of theta alone for the central
@@ -360,7 +278,8 @@ const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
         "the tuner supports the kf, ekf, iekf, ukf, ckf and ghkf filters, not pf (its "
         "likelihood is a random, non-smooth function of Q and R)");
   }
-  if (spec.iterations < 1) throw InputError("EKF iterations must be >= 1");
+  // The filter's own check of its options (the one estlab filter applies).
+  if (!IsValidFilterOptions(spec, &error)) throw InputError(error);
   if (!spec.adapt.rule.empty())
     throw InputError("the tuner needs a filter without online adaptation (--adapt)");
   if (!(spec.transition.substeps >= 1)) throw InputError("substeps must be >= 1");
@@ -445,23 +364,20 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     cvodes_options_ = o;
     cvodes_ = MakeTransition<Model>(params_, o);
   }
-  if (spec.kind != FilterKind::kEkf && spec.kind != FilterKind::kKf) {
-    sigma_ = true;
-    SigmaPointOptions o;
-    o.rule = spec.kind == FilterKind::kUkf   ? SigmaRule::kUnscented
-             : spec.kind == FilterKind::kCkf ? SigmaRule::kCubature
-                                             : SigmaRule::kGaussHermite;
-    o.alpha = spec.alpha;
-    o.beta = spec.beta;
-    o.kappa = spec.kappa;
-    o.gh_order = spec.gh_order;
-    o.jitter = spec.jitter;
-    std::string error;
-    if (!o.IsValid(&error)) throw InputError(error);
-    const UnitSigmaPoints unit = MakeUnitSigmaPoints(kN, o);
-    unit_points_ = unit.points;
-    mean_weights_ = unit.mean_weights;
-    cov_weights_ = unit.cov_weights;
+  switch (spec.kind) {
+    case FilterKind::kEkf:
+      iterations_ = EkfOptionsOf(spec).iterations;
+      break;
+    case FilterKind::kUkf:
+    case FilterKind::kCkf:
+    case FilterKind::kGhkf:
+      sigma_ = true;
+      sigma_redraw_ = spec.sigma_redraw;
+      sigma_set_ = MakeSigmaPointSet(kN, SigmaPointOptionsOf(spec));
+      break;
+    case FilterKind::kKf:
+    case FilterKind::kPf:  // rejected by CheckSpec
+      break;
   }
 }
 
@@ -493,10 +409,11 @@ template <class Model, class Meas>
 template <class T>
 bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
                                             std::string* why) const {
-  auto fail = [&](const FilterData& d, size_t k, const char* what) {
+  std::string reason;
+  auto fail = [&](const FilterData& d, size_t k, const std::string& what) {
     if (why != nullptr) {
-      *why = std::string(what) + " at step " + std::to_string(k) +
-             (d.path.empty() ? "" : " of " + d.path) + " (t = " + FormatNumber(d.t[k]) + ")";
+      *why = what + " at step " + std::to_string(k) + (d.path.empty() ? "" : " of " + d.path) +
+             " (t = " + FormatNumber(d.t[k]) + ")";
     }
     return false;
   };
@@ -512,272 +429,152 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
   const MeasCovT<T> R = r_.template Matrix<T>(theta_r, 0.0);
   StateCovT<T> Q = q_.template Matrix<T>(theta_q, dt_ref_);
   double q_dt = dt_ref_;
-  std::vector<StateT<T>> propagated;
-
+  Belief<T> b;
+  if (sigma_) {
+    const Eigen::Index count = sigma_set_.unit_points.cols();
+    b.points.resize(kN, count);
+    b.propagated.resize(kN, count);
+    b.measurement_points.resize(kM, count);
+  }
   for (const FilterData* data : datasets_) {
     const FilterData& d = *data;
     if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(params_, cvodes_options_);
-    StateT<T> x = x0_.template cast<T>();
-    StateCovT<T> P = p0_.template cast<T>();
-    double t_prev = spec_.has_t0 ? spec_.t0 : d.t[0];
+    b.x = x0_.template cast<T>();
+    b.P = p0_.template cast<T>();
+    b.have_propagated = false;
     long update_index = 0;
-    for (size_t k = 0; k < d.t.size(); ++k) {
-      const double t = d.t[k];
-      const double u = d.has_input ? d.u[k > 0 ? k - 1 : 0] : spec_.input;
-      bool predicted = false;
-      if (t > t_prev) {
-        if (q_.DependsOnDt() && t - t_prev != q_dt) {
-          q_dt = t - t_prev;
-          Q = q_.template Matrix<T>(theta_q, q_dt);
-        }
-        bool ok = false;
-        try {
-          ok = kf_      ? PredictKf<T>(&x, &P, t - t_prev, u, Q)
-               : sigma_ ? PredictSigma<T>(&x, &P, &propagated, t_prev, t, u, Q)
-                        : PredictEkf<T>(&x, &P, t_prev, t, u, Q);
-        } catch (const NumericalError& e) {  // CVODES failed
-          if (why != nullptr) *why = e.what();
-          return false;
-        }
-        if (!ok) return fail(d, k, "prediction failed");
-        predicted = true;
+    auto predict = [&](size_t k, double t0, double t1, double u) {
+      if (q_.DependsOnDt() && t1 - t0 != q_dt) {
+        q_dt = t1 - t0;
+        Q = q_.template Matrix<T>(theta_q, q_dt);
       }
-      t_prev = t;
-      Vec<double, kM> z;
-      bool have_z = true;
-      for (int j = 0; j < kM; ++j) {
-        z(j) = d.z[k * kM + j];
-        if (!std::isfinite(z(j))) have_z = false;
+      try {
+        if (!Predict<T>(&b, t0, t1, u, Q, &reason)) return fail(d, k, "prediction failed: " + reason);
+      } catch (const NumericalError& e) {  // CVODES failed
+        if (why != nullptr) *why = e.what();
+        return false;
       }
-      if (have_z) {
+      return true;
+    };
+    auto row = [&](size_t k, const Vec<double, kM>* z) {
+      if (z != nullptr) {
         MeasT<T> e;
         T log_det;
-        const bool ok =
-            kf_      ? UpdateKf<T>(&x, &P, z, R, &e, &log_det)
-            : sigma_ ? UpdateSigma<T>(&x, &P, predicted ? &propagated : nullptr, z, R, &e, &log_det)
-                     : UpdateEkf<T>(&x, &P, z, R, &e, &log_det);
-        if (!ok) return fail(d, k, "update failed (innovation covariance not positive definite)");
+        if (!Update<T>(&b, *z, R, &e, &log_det, &reason))
+          return fail(d, k, "update failed: " + reason);
         if (update_index >= options_.burn_in) sink(e, log_det);
         ++update_index;
       }
-      bool finite = true;
-      for (int i = 0; i < kN && finite; ++i) {
-        finite = ScalarFinite(x(i));
-        for (int c = 0; c < kN && finite; ++c) finite = ScalarFinite(P(i, c));
-      }
-      if (!finite) return fail(d, k, "the estimate or its covariance is not finite");
-      if (ScalarPart(P.trace()) > spec_.max_cov_trace) return fail(d, k, "trace(P) too large");
-    }
+      if (!WithinDivergenceGuard<kN, T>(b.x, b.P, spec_.max_cov_trace, &reason))
+        return fail(d, k, reason);
+      return true;
+    };
+    if (!ForEachStep<kM>(spec_, d, predict, row)) return false;
   }
   return true;
 }
 
 template <class Model, class Meas>
 template <class T>
-bool InnovationLikelihood<Model, Meas>::PredictEkf(StateT<T>* x, StateCovT<T>* P, double t0,
-                                                   double t1, double u,
-                                                   const StateCovT<T>& Q) const {
-  StateCovT<T> F;
+typename InnovationLikelihood<Model, Meas>::template StateT<T>
+InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, double t1, double u,
+                                             StateCovT<T>* F) const {
   if constexpr (std::is_same_v<T, double>) {
     if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
       cvodes_->SetInput(u);
-      *x = cvodes_->StepWithJacobian(*x, t0, t1, &F);
-      if (!x->allFinite() || !F.allFinite()) return false;
-      const StateCovT<T> Pm = F * (*P) * F.transpose() + Q;
-      *P = 0.5 * (Pm + Pm.transpose());
-      return true;
+      return F != nullptr ? cvodes_->StepWithJacobian(x, t0, t1, F) : cvodes_->Step(x, t0, t1);
     }
   }
   const Integrator scheme = spec_.transition.integrator;
   const int substeps = spec_.transition.substeps;
   const Params& p = params_;
-  *x = ValueAndJacobianT<kN, kN>(
+  if (F == nullptr) return FixedPropagate<Model, T>(scheme, x, t0, t1, substeps, u, p);
+  return ValueAndJacobianT<kN, kN>(
       [&](const auto& xs) {
         using S = typename std::decay_t<decltype(xs)>::Scalar;
         return FixedPropagate<Model, S>(scheme, xs, t0, t1, substeps, u, p);
       },
-      *x, &F);
-  // P- = F P F^T + Q
-  const StateCovT<T> Pm = F * (*P) * F.transpose() + Q;
-  *P = 0.5 * (Pm + Pm.transpose());
-  return true;
+      x, F);
 }
 
 template <class Model, class Meas>
 template <class T>
-bool InnovationLikelihood<Model, Meas>::Gain(const StateT<T>& x, const StateCovT<T>& P,
-                                             const Vec<double, kM>& z, const MeasCovT<T>& R,
-                                             MeasT<T>* residual, Eigen::Matrix<T, kM, kN>* H,
-                                             MeasCovT<T>* S, Eigen::LLT<MeasCovT<T>>* llt,
-                                             Eigen::Matrix<T, kN, kM>* K) const {
-  const Params& p = params_;
-  const MeasT<T> z_pred = ValueAndJacobianT<kM, kN>(
-      [&](const auto& xs) {
-        using S = typename std::decay_t<decltype(xs)>::Scalar;
-        return Meas::template Eval<S>(xs, p);
-      },
-      x, H);
-  *residual = WrapOutputs<T>(z.template cast<T>() - z_pred);
-  // S = H P H^T + R,  K = P H^T S^-1, i.e. K^T = S^-1 (H P)
-  const Eigen::Matrix<T, kM, kN> HP = (*H) * P;
-  *S = HP * H->transpose() + R;
-  *S = (0.5 * (*S + S->transpose())).eval();
-  llt->compute(*S);
-  if (llt->info() != Eigen::Success) return false;
-  *K = llt->solve(HP).transpose();
-  return true;
-}
-
-template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::UpdateEkf(StateT<T>* x, StateCovT<T>* P,
-                                                  const Vec<double, kM>& z, const MeasCovT<T>& R,
-                                                  MeasT<T>* whitened, T* log_det) const {
-  Eigen::Matrix<T, kM, kN> H;
-  MeasCovT<T> S;
-  Eigen::LLT<MeasCovT<T>> llt;
-  Eigen::Matrix<T, kN, kM> K;
-  MeasT<T> nu;
-  // i = 0: nu = wrap(z - h(x-)), S = H P- H^T + R (the likelihood term)
-  if (!Gain<T>(*x, *P, z, R, &nu, &H, &S, &llt, &K)) return false;
-  Whiten<T>(llt, nu, whitened, log_det);
-  const StateT<T> x_prior = *x;
-  StateT<T> x_iter = x_prior + K * nu;
-  // IEKF: x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i wrap(x- - x_i))
-  for (int i = 1; i < spec_.iterations; ++i) {
-    MeasT<T> r;
-    if (!Gain<T>(x_iter, *P, z, R, &r, &H, &S, &llt, &K)) return false;
-    x_iter = x_prior + K * (r - H * WrapStates<T>(x_prior - x_iter));
-  }
-  // P+ = (I - K H) P- (I - K H)^T + K R K^T with the last K, H
-  const StateCovT<T> I_KH = StateCovT<T>::Identity() - K * H;
-  const StateCovT<T> Pp = I_KH * (*P) * I_KH.transpose() + K * R * K.transpose();
-  *x = x_iter;
-  *P = 0.5 * (Pp + Pp.transpose());
-  return true;
-}
-
-template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::SigmaPoints(const StateT<T>& x, const StateCovT<T>& P,
-                                                    bool add_jitter,
-                                                    std::vector<StateT<T>>* points) const {
-  // X_i = x + L xi_i,  L L^T = P (+ jitter I)
-  StateCovT<T> C = P;
-  if (add_jitter && spec_.jitter > 0) C.diagonal().array() += T(spec_.jitter);
-  const Eigen::LLT<StateCovT<T>> llt(C);
-  if (llt.info() != Eigen::Success) return false;
-  const StateCovT<T> L = llt.matrixL();
-  points->resize(unit_points_.cols());
-  for (Eigen::Index i = 0; i < unit_points_.cols(); ++i) {
-    const Vec<double, kN> xi = unit_points_.col(i);
-    (*points)[i] = x + L * xi.template cast<T>();
-  }
-  return true;
-}
-
-template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::PredictSigma(StateT<T>* x, StateCovT<T>* P,
-                                                     std::vector<StateT<T>>* propagated, double t0,
-                                                     double t1, double u,
-                                                     const StateCovT<T>& Q) const {
-  if (!SigmaPoints<T>(*x, *P, true, propagated)) return false;
-  const int count = int(propagated->size());
-  if constexpr (std::is_same_v<T, double>) {
-    if (cvodes_ != nullptr) cvodes_->SetInput(u);
-  }
-  for (auto& point : *propagated) {
-    if constexpr (std::is_same_v<T, double>) {
-      if (cvodes_ != nullptr) {
-        point = cvodes_->Step(point, t0, t1);
-        continue;
-      }
+bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double t1, double u,
+                                                const StateCovT<T>& Q, std::string* why) const {
+  if (kf_) {
+    const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
+    if (step == nullptr) {  // cannot happen: SetUpKf saw every step
+      *why = "no KF discretisation for this step";
+      return false;
     }
-    point = FixedPropagate<Model, T>(spec_.transition.integrator, point, t0, t1,
-                                     spec_.transition.substeps, u, params_);
+    KfPredict<Model, kM, T>(kf_lin_, *step, u, Q, &b->x, &b->P);
+  } else if (sigma_) {
+    // X_i = x + L xi_i (L L^T = P + jitter I),  X-_i = Phi(X_i)
+    b->have_propagated = false;
+    if (!DrawSigmaPoints<kN, T>(sigma_set_, b->x, b->P, /*add_jitter=*/true, &b->points)) {
+      *why = "Cholesky of P + jitter I failed (not positive definite)";
+      return false;
+    }
+    for (Eigen::Index i = 0; i < b->points.cols(); ++i)
+      b->propagated.col(i) = Propagate<T>(StateT<T>(b->points.col(i)), t0, t1, u, nullptr);
+    SigmaPredictMoments<kN, T>(sigma_set_, b->propagated, Q, &b->x, &b->P);
+    b->have_propagated = true;
+  } else {
+    // x- = Phi(x), F = dPhi/dx;  P- = F P F^T + Q
+    StateCovT<T> F;
+    b->x = Propagate<T>(b->x, t0, t1, u, &F);
+    b->P = EkfPredictCovariance<kN, T>(F, b->P, Q);
   }
-  // x- = X-_0 + sum_i Wm_i wrap(X-_i - X-_0)
-  const std::vector<StateT<T>>& Y = *propagated;
-  StateT<T> mean = StateT<T>::Zero();
-  for (int i = 1; i < count; ++i) mean += mean_weights_(i) * WrapStates<T>(Y[i] - Y[0]);
-  mean += Y[0];
-  // P- = sum_i Wc_i dX_i dX_i^T + Q + jitter I
-  StateCovT<T> cov = Q;
-  for (int i = 0; i < count; ++i) {
-    const StateT<T> d = WrapStates<T>(Y[i] - mean);
-    cov += cov_weights_(i) * d * d.transpose();
+  if (!BeliefFinite<kN, T>(b->x, b->P)) {
+    *why = "predicted mean or covariance is not finite";
+    return false;
   }
-  if (spec_.jitter > 0) cov.diagonal().array() += T(spec_.jitter);
-  *x = mean;
-  *P = 0.5 * (cov + cov.transpose());
   return true;
 }
 
 template <class Model, class Meas>
 template <class T>
-bool InnovationLikelihood<Model, Meas>::UpdateSigma(StateT<T>* x, StateCovT<T>* P,
-                                                    const std::vector<StateT<T>>* propagated,
-                                                    const Vec<double, kM>& z, const MeasCovT<T>& R,
-                                                    MeasT<T>* whitened, T* log_det) const {
-  // Y_i: the propagated points, or new ones from (x-, P-) without jitter.
-  std::vector<StateT<T>> redrawn;
-  const std::vector<StateT<T>>* points = propagated;
-  if (points == nullptr || spec_.sigma_redraw) {
-    if (!SigmaPoints<T>(*x, *P, false, &redrawn)) return false;
-    points = &redrawn;
+bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z,
+                                               const MeasCovT<T>& R, MeasT<T>* whitened,
+                                               T* log_det, std::string* why) const {
+  GaussianUpdate<T, kN, kM> u;
+  FilterStatus status;
+  if (kf_) {
+    status = KfUpdate<Model, Meas, T>(kf_lin_, b->x, b->P, z, R, &u, why);
+  } else if (sigma_) {
+    // Y_i: the propagated points, or new ones from (x-, P-) without jitter.
+    const bool redraw = sigma_redraw_ || !b->have_propagated;
+    b->have_propagated = false;
+    if (redraw && !DrawSigmaPoints<kN, T>(sigma_set_, b->x, b->P, false, &b->points)) {
+      *why = "Cholesky of P- failed (not positive definite)";
+      return false;
+    }
+    status = SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
+                                         &b->measurement_points, b->x, b->P, z, R, params_, &u,
+                                         why);
+  } else {
+    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, params_, iterations_, &u, why);
   }
-  const std::vector<StateT<T>>& Y = *points;
-  const int count = int(Y.size());
-  // Z_i = h(Y_i),  z^ = Z_0 + sum_i Wm_i wrap(Z_i - Z_0)
-  std::vector<MeasT<T>> Z(count);
-  for (int i = 0; i < count; ++i) Z[i] = Meas::template Eval<T>(Y[i], params_);
-  MeasT<T> z_pred = MeasT<T>::Zero();
-  for (int i = 1; i < count; ++i) z_pred += mean_weights_(i) * WrapOutputs<T>(Z[i] - Z[0]);
-  z_pred += Z[0];
-  // S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,  C = sum_i Wc_i dY_i dZ_i^T
-  MeasCovT<T> S = MeasCovT<T>::Zero();
-  Eigen::Matrix<T, kN, kM> C = Eigen::Matrix<T, kN, kM>::Zero();
-  for (int i = 0; i < count; ++i) {
-    const MeasT<T> dz = WrapOutputs<T>(Z[i] - z_pred);
-    S += cov_weights_(i) * dz * dz.transpose();
-    C += cov_weights_(i) * WrapStates<T>(Y[i] - *x) * dz.transpose();
-  }
-  S += R;
-  if (spec_.jitter > 0) S.diagonal().array() += T(spec_.jitter);
-  S = (0.5 * (S + S.transpose())).eval();
-  const Eigen::LLT<MeasCovT<T>> llt(S);
-  if (llt.info() != Eigen::Success) return false;
-  // K = C S^-1, i.e. K^T = S^-1 C^T;  nu = wrap(z - z^)
-  const Eigen::Matrix<T, kN, kM> K = llt.solve(C.transpose()).transpose();
-  const MeasT<T> nu = WrapOutputs<T>(z.template cast<T>() - z_pred);
-  Whiten<T>(llt, nu, whitened, log_det);
-  // x+ = x- + K nu,  P+ = P- - K S K^T
-  *x += K * nu;
-  const StateCovT<T> Pp = *P - K * S * K.transpose();
-  *P = 0.5 * (Pp + Pp.transpose());
+  if (status != FilterStatus::kOk) return false;
+  Whiten<kM, T>(u.L, u.nu, whitened, log_det);
+  b->x = u.x;
+  b->P = u.P;
   return true;
 }
 
 template <class Model, class Meas>
 void InnovationLikelihood<Model, Meas>::SetUpKf(const std::vector<FilterData>& datasets) {
   kf_ = true;
-  KfOptions o;
-  o.operating_point = spec_.linearize_at;
-  o.operating_input = spec_.input;
-  LinearizedKf<Model, Meas> kf(params_, o);  // throws InputError for a bad operating point
+  LinearizedKf<Model, Meas> kf(params_, KfOptionsOf(spec_));  // throws for a bad x*
   kf.Initialize(x0_, p0_);
-  x_star_ = kf.operating_point();
-  u_star_ = spec_.input;
-  h_jacobian_ = kf.H();
-  h_star_ = Meas::template Eval<double>(x_star_, params_);
+  kf_lin_ = kf.linearization();
   // Phi, Gamma, d for every step length that Run() will meet.
   auto add = [&](double dt) {
     if (!(dt > 0.0) || FindKfStep(dt) != nullptr) return;
     if (kf.Predict(0.0, dt, Mat<kN, kN>::Zero()) != FilterStatus::kOk)
       throw InputError("the linearised model (kf) is not finite at the operating point: " +
                        kf.last_error());
-    kf_steps_.push_back({dt, kf.Phi(), kf.Gamma(), kf.d()});
+    kf_steps_.push_back({dt, kf.discretization()});
   };
   for (const FilterData& d : datasets) {
     if (d.t.empty()) continue;
@@ -787,49 +584,6 @@ void InnovationLikelihood<Model, Meas>::SetUpKf(const std::vector<FilterData>& d
       t_prev = t;
     }
   }
-}
-
-template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::PredictKf(StateT<T>* x, StateCovT<T>* P, double dt,
-                                                  double u, const StateCovT<T>& Q) const {
-  const KfStep* step = FindKfStep(dt);
-  if (step == nullptr) return false;  // cannot happen: SetUpKf saw every step
-  // x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
-  const StateT<T> delta = WrapStates<T>(*x - x_star_.template cast<T>());
-  const Mat<kN, kN>& phi = step->phi;
-  const StateT<T> x_pred = x_star_.template cast<T>() + phi.template cast<T>() * delta +
-                           (step->gamma * (u - u_star_) + step->drift).template cast<T>();
-  const StateCovT<T> Pm = phi.template cast<T>() * (*P) * phi.transpose().template cast<T>() + Q;
-  *x = x_pred;
-  *P = 0.5 * (Pm + Pm.transpose());
-  return true;
-}
-
-template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::UpdateKf(StateT<T>* x, StateCovT<T>* P,
-                                                 const Vec<double, kM>& z, const MeasCovT<T>& R,
-                                                 MeasT<T>* whitened, T* log_det) const {
-  const Eigen::Matrix<T, kM, kN> H = h_jacobian_.template cast<T>();
-  // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
-  const StateT<T> delta = WrapStates<T>(*x - x_star_.template cast<T>());
-  const MeasT<T> z_pred = h_star_.template cast<T>() + H * delta;
-  const MeasT<T> nu = WrapOutputs<T>(z.template cast<T>() - z_pred);
-  // S = H P H^T + R,  K^T = S^-1 (H P)
-  const Eigen::Matrix<T, kM, kN> HP = H * (*P);
-  MeasCovT<T> S = HP * H.transpose() + R;
-  S = (0.5 * (S + S.transpose())).eval();
-  const Eigen::LLT<MeasCovT<T>> llt(S);
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::Matrix<T, kN, kM> K = llt.solve(HP).transpose();
-  Whiten<T>(llt, nu, whitened, log_det);
-  // x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T
-  const StateCovT<T> I_KH = StateCovT<T>::Identity() - K * H;
-  const StateCovT<T> Pp = I_KH * (*P) * I_KH.transpose() + K * R * K.transpose();
-  *x += K * nu;
-  *P = 0.5 * (Pp + Pp.transpose());
-  return true;
 }
 
 }  // namespace estlab

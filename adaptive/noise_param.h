@@ -25,6 +25,7 @@
 
 #include "adaptive/tuner.h"
 #include "src/core/types.h"
+#include "src/core/white_accel.h"
 
 namespace estlab {
 
@@ -164,12 +165,8 @@ class CovarianceParam {
   }
 
   Mat<D, D> WhiteAccel(double qc, double dt) const {
-    Mat<D, D> Q = Mat<D, D>::Zero();
-    for (const auto& [pos, rate] : pairs_) {
-      Q(pos, pos) = qc * dt * dt * dt / 3.0;
-      Q(pos, rate) = Q(rate, pos) = qc * dt * dt / 2.0;
-      Q(rate, rate) = qc * dt;
-    }
+    Mat<D, D> Q;
+    FillWhiteAccel(pairs_, qc, dt, &Q);
     return Q;
   }
 

@@ -14,7 +14,7 @@
 // than 8 parameters are done in ceil(K / 8) passes (chunking, as
 // ceres::DynamicAutoDiffCostFunction does), so only two Jet sizes are
 // instantiated per model and measurement (compile time on 2 cores). The EKF's Jacobians of the
-// fixed-step map need second derivatives for that and use NestedJet (adaptive/nested_jet.h).
+// fixed-step map need second derivatives for that and use NestedJet (src/ode/nested_jet.h).
 //
 // The least-squares form (Levenberg-Marquardt, ceres::Solver with bounds)
 // minimises 1/2 sum r^2 over the residuals

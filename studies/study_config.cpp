@@ -1,5 +1,7 @@
 #include "studies/study_config.h"
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <boost/program_options.hpp>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <sstream>
 
 #include "src/cli/args.h"
+#include "src/core/white_accel.h"
 #include "src/cli/filter_options.h"
 #include "src/core/types.h"
 #include "src/io/output_file.h"
@@ -401,14 +404,13 @@ std::vector<Alternative> ParseAlternatives(const Entry& e, const ConfigErrors& e
 
 }  // namespace
 
-std::vector<double> WhiteAccelCovariance(int n, double qc, double dt) {
-  std::vector<double> q(n * n, 0.0);
-  for (int p = 0; p + 1 < n; p += 2) {
-    const int r = p + 1;
-    q[p * n + p] = qc * dt * dt * dt / 3.0;
-    q[p * n + r] = q[r * n + p] = qc * dt * dt / 2.0;
-    q[r * n + r] = qc * dt;
-  }
+std::vector<double> WhiteAccelCovariance(const ModelEntry& model, double qc, double dt) {
+  const int n = int(model.states.size());
+  Eigen::MatrixXd Q(n, n);
+  FillWhiteAccel(model.position_rate_pairs, qc, dt, &Q);
+  std::vector<double> q(n * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) q[i * n + j] = Q(i, j);
   return q;
 }
 
@@ -528,11 +530,11 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
         if (qc < 0) throw InputError("process-noise: qc must be >= 0");
         return qc;
       });
-      if (n % 2 != 0)
+      if (model.position_rate_pairs.empty())
         v.Fail("process-noise", "white-accel needs (position, rate) state pairs; model '" +
-                                    model.name + "' has " + std::to_string(n) + " states");
+                                    model.name + "' has none");
       sc.oracle_q_white_accel = true;
-      sc.oracle_q = WhiteAccelCovariance(n, sc.oracle_qc, truth.dt);
+      sc.oracle_q = WhiteAccelCovariance(model, sc.oracle_qc, truth.dt);
       truth.process_noise_cov = sc.oracle_q;
       sc.truth_description += ", white-accel qc " + FormatNumber(sc.oracle_qc);
     } else if (kind == "matrix") {

@@ -218,11 +218,9 @@ StudyConfig LoadStudyConfig(const std::string& path);
 StudyConfig ParseStudyConfig(const std::string& text, const std::string& path);
 
 // The truth's white-noise-acceleration covariance over one step dt,
-// qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] on the state pairs (0,1), (2,3), ...
-// (n x n, row-major). Every registered model orders its states as
-// (position, rate) pairs; study_config_test checks this against each model's
-// own pairs (the filters' q-white-accel).
-std::vector<double> WhiteAccelCovariance(int n, double qc, double dt);
+// qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] on the model's (position, rate) pairs
+// (n x n, row-major; src/core/white_accel.h, the filters' q-white-accel).
+std::vector<double> WhiteAccelCovariance(const ModelEntry& model, double qc, double dt);
 
 // 64-bit FNV-1a of the text: identifies a configuration in results folders.
 uint64_t ConfigHash(const std::string& text);

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace estlab {
 
@@ -20,6 +21,11 @@ using Vec = Eigen::Matrix<T, N, 1>;
 
 template <int R, int C>
 using Mat = Eigen::Matrix<double, R, C>;
+
+// A fixed-size matrix of any scalar (double, ceres::Jet): the filter steps
+// are written once on it (src/filters/*_step.h).
+template <class T, int R, int C>
+using MatT = Eigen::Matrix<T, R, C>;
 
 // Bad user input: unknown names, wrong lengths, non-finite numbers,
 // non-positive-definite covariances, malformed files. The CLI prints
@@ -42,6 +48,37 @@ inline double WrapAngle(double a) {
   double w = std::remainder(a, 2.0 * kPi);  // in [-pi, pi]
   if (w <= -kPi) w += 2.0 * kPi;
   return w;
+}
+
+// Values already in (-pi, pi] are returned as they are (WrapAngle would return
+// them unchanged too: std::remainder is exact), without the remainder call.
+inline double WrapAngleFast(double a) {
+  constexpr double kPi = 3.14159265358979323846;
+  return (a > -kPi && a <= kPi) ? a : WrapAngle(a);
+}
+
+// The value part of a double or a ceres::Jet (recursively; NestedJet adds its
+// own overload in src/ode/nested_jet.h): for control flow (angle wrapping,
+// divergence checks), never for derivatives.
+template <class T>
+double ScalarPart(const T& v) {
+  if constexpr (std::is_arithmetic_v<T>) {
+    return double(v);
+  } else {
+    return ScalarPart(v.a);
+  }
+}
+
+// Wraps an angle-valued quantity of any scalar to (-pi, pi] by shifting its
+// value by a multiple of 2 pi; derivatives are unchanged.
+template <class T>
+T WrapAngleT(const T& a) {
+  if constexpr (std::is_same_v<T, double>) {
+    return WrapAngleFast(a);
+  } else {
+    const double value = ScalarPart(a);
+    return a + (WrapAngle(value) - value);
+  }
 }
 
 // Short human-readable number ("%.6g") for messages.

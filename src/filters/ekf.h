@@ -11,15 +11,9 @@
 // The process Jacobian F = dPhi/dx is whatever transition->StepWithJacobian
 // returns: the exact derivative of the discrete map for the fixed-step
 // integrators (AD through the steps), CVODES forward sensitivities otherwise.
-// The measurement Jacobian H = dh/dx is exact (AD of Meas::Eval).
-//
-// Update (i = 0 .. iterations-1, x_0 = x-, Bell & Cathey 1993):
-//   H_i = dh/dx(x_i),  S_i = H_i P- H_i^T + R,  K_i = P- H_i^T S_i^-1
-//   x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i (x- - x_i))
-//   x+ = x_iterations,  P+ = (I - K H) P- (I - K H)^T + K R K^T  (last K, H)
-// With iterations = 1 this is the EKF. The innovation nu = wrap(z - h(x-)), S,
-// the log-likelihood and NIS are reported at the prior (i = 0), so they are
-// the EKF's whatever the number of iterations.
+// The measurement Jacobian H = dh/dx is exact (AD of Meas::Eval). The
+// equations (EKF and IEKF) are in src/filters/ekf_step.h, shared with the
+// tuner's likelihood; this class owns the belief and the transition call.
 //
 // WARNING: the filter does not own the transition; it must outlive the
 // filter, and its input is the one set by SetInput (on either object).
@@ -29,19 +23,15 @@
 #include <exception>
 #include <string>
 
+#include "src/filters/ekf_step.h"
 #include "src/filters/filter.h"
+#include "src/filters/filter_options.h"
 #include "src/filters/filter_util.h"
+#include "src/filters/gaussian_update.h"
 #include "src/filters/linearize.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
-
-struct EkfOptions {
-  // 1 = EKF; > 1 = iterated EKF with this many Gauss-Newton iterations.
-  int iterations = 1;
-
-  bool IsValid(std::string* error) const;
-};
 
 template <class Model, class Meas>
 class Ekf final : public FilterCommon<Model, Meas> {
@@ -78,10 +68,8 @@ class Ekf final : public FilterCommon<Model, Meas> {
     } catch (const std::exception& e) {
       return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
     }
-    // P- = F P F^T + Q
-    StateCov P_pred = F * P_ * F.transpose() + Q;
-    Symmetrize(&P_pred);
-    if (!BeliefFinite(x_pred, P_pred))
+    const StateCov P_pred = EkfPredictCovariance<kN>(F, P_, Q);  // F P F^T + Q
+    if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
     x_ = x_pred;
     P_ = P_pred;
@@ -91,37 +79,16 @@ class Ekf final : public FilterCommon<Model, Meas> {
   StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
       return FailResult(ready, error_);
-    const State x_prior = x_;
-    Mat<kM, kN> H;
-    MeasurementCov S;
-    Eigen::LLT<MeasurementCov> llt;
-    Mat<kN, kM> K;
-    // i = 0:  nu = wrap(z - h(x-)),  S = H P- H^T + R,  K = P- H^T S^-1
-    const Measurement nu = WrapResidual<kM>(
-        z - MeasurementAndJacobian<Model, Meas>(x_prior, params_, &H), Meas::kAngleOutputs);
-    if (!KalmanGain<kN, kM>(H, P_, R, &S, &llt, &K))
-      return FailResult(FilterStatus::kFactorizationFailed,
-                        "Cholesky of the innovation covariance S = H P H^T + R failed");
+    GaussianUpdate<double, kN, kM> u;
+    std::string why;
+    const FilterStatus status =
+        EkfUpdate<Model, Meas>(x_, P_, z, R, params_, options_.iterations, &u, &why);
+    if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation(nu, S, llt, &result);
-    State x_iter = x_prior + K * nu;  // x_1 = x- + K_0 nu
-    for (int i = 1; i < options_.iterations; ++i) {
-      // x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i (x- - x_i))
-      const Measurement r = WrapResidual<kM>(
-          z - MeasurementAndJacobian<Model, Meas>(x_iter, params_, &H), Meas::kAngleOutputs);
-      if (!KalmanGain<kN, kM>(H, P_, R, &S, &llt, &K))
-        return FailResult(
-            FilterStatus::kFactorizationFailed,
-            "Cholesky of S = H P H^T + R failed in IEKF iteration " + std::to_string(i));
-      x_iter = x_prior + K * (r - H * WrapResidual<kN>(x_prior - x_iter, Model::kAngleStates));
-    }
-    // P+ = (I - K H) P- (I - K H)^T + K R K^T with the last K, H
-    const StateCov P_post = JosephUpdate<kN, kM>(P_, K, H, R);
-    if (!BeliefFinite(x_iter, P_post))
-      return FailResult(FilterStatus::kNonFinite, "updated mean or covariance is not finite");
-    x_ = x_iter;
-    P_ = P_post;
-    result.gain = K;
+    SetInnovation<kM>(u.nu, u.S, u.L, &result);
+    x_ = u.x;
+    P_ = u.P;
+    result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
     result.residual = WrapResidual<kM>(
         z - MeasurementAndJacobian<Model, Meas>(x_, params_, nullptr), Meas::kAngleOutputs);

@@ -21,6 +21,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 #include "src/core/types.h"
 #include "src/ode/transition.h"
@@ -96,18 +97,13 @@ class Filter {
   virtual std::string last_error() const { return ""; }
 };
 
-// Wraps the angle components (flags[i] true) of a residual to (-pi, pi].
-// Values already in (-pi, pi] are returned as they are (WrapAngle would return
-// them unchanged too: std::remainder is exact), without the remainder call.
-inline double WrapAngleFast(double a) {
-  constexpr double kPi = 3.14159265358979323846;
-  return (a > -kPi && a <= kPi) ? a : WrapAngle(a);
-}
-
-template <int D, std::size_t K>
-Vec<double, D> WrapResidual(Vec<double, D> r, const std::array<bool, K>& angle_flags) {
+// Wraps the angle components (flags[i] true) of a residual to (-pi, pi], for
+// any scalar T (WrapAngleT; T is named, not deduced, so that an Eigen
+// expression converts: WrapResidual<M>(z - h) for double, <M, T> otherwise).
+template <int D, class T = double, std::size_t K>
+Vec<T, D> WrapResidual(std::type_identity_t<Vec<T, D>> r, const std::array<bool, K>& angle_flags) {
   for (int i = 0; i < D; ++i)
-    if (angle_flags[i]) r(i) = WrapAngleFast(r(i));
+    if (angle_flags[i]) r(i) = WrapAngleT(r(i));
   return r;
 }
 

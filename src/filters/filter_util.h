@@ -1,17 +1,17 @@
-// Small numerical pieces shared by the filters: symmetrisation, the Kalman
-// gain by a Cholesky solve, the Joseph-form covariance update, the Gaussian
-// log-likelihood from a Cholesky factor, a square root of a positive
-// semidefinite covariance, and weighted (circular where needed) moments of a
-// point set.
+// Small numerical pieces shared by the filters, written once for any scalar
+// (double, ceres::Jet): symmetrisation, small Cholesky factorisations and
+// solves, the Kalman gain, the Joseph-form covariance update, the whitened
+// innovation and its Gaussian log-likelihood, weighted moments of a point set
+// (no wrapping inside a set), and a square root of a positive semidefinite
+// covariance.
 //
 // Usage:
-//   Mat<1, 1> S;
-//   Eigen::LLT<Mat<1, 1>> llt;
+//   Mat<1, 1> S, L;
 //   Mat<2, 1> K;
-//   if (!KalmanGain(H, P, R, &S, &llt, &K)) return failure;   // S not PD
-//   double nis;
-//   const double loglik = GaussianLogLikelihood(llt, nu, &nis);
-//   P = JosephUpdate(P, K, H, R);
+//   if (!KalmanGain<2, 1>(H, P, R, &S, &L, &K)) return failure;   // S not PD
+//   StepResult<1> r;
+//   SetInnovation<1>(nu, S, L, &r);       // nis, log N(nu; 0, S)
+//   P = JosephUpdate<2, 1>(P, K, H, R);
 //
 // All functions work on fixed-size Eigen types and allocate nothing.
 #ifndef ESTLAB_FILTERS_FILTER_UTIL_H_
@@ -23,6 +23,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 #include "src/core/types.h"
 #include "src/filters/filter.h"
@@ -31,9 +32,13 @@ namespace estlab {
 
 inline constexpr double kLog2Pi = 1.83787706640934548356;  // log(2 pi)
 
+// Every function below is written once for any scalar T: double when a filter
+// runs, ceres::Jet when the tuner differentiates the likelihood
+// (adaptive/likelihood.h). The double path is the one the benchmarks measure.
+
 // P <- (P + P^T) / 2.
-template <int N>
-void Symmetrize(Mat<N, N>* P) {
+template <int N, class T = double>
+void Symmetrize(MatT<T, N, N>* P) {
   *P = (0.5 * (*P + P->transpose())).eval();
 }
 
@@ -42,18 +47,19 @@ void Symmetrize(Mat<N, N>* P) {
 // Eigen's unblocked LLT, written out for compile-time N: Eigen's LLT of a
 // 4 x 4 runs through its generic block code, ~5x the instructions). Returns
 // false when a pivot is not > 0 (not numerically positive definite, or NaN).
-template <int N>
-bool SmallCholesky(const Mat<N, N>& A, Mat<N, N>* L) {
-  Mat<N, N>& l = *L;
+template <int N, class T = double>
+bool SmallCholesky(const MatT<T, N, N>& A, MatT<T, N, N>* L) {
+  using std::sqrt;
+  MatT<T, N, N>& l = *L;
   l.setZero();
   for (int k = 0; k < N; ++k) {
-    double d = A(k, k);
+    T d = A(k, k);
     for (int j = 0; j < k; ++j) d -= l(k, j) * l(k, j);
     if (!(d > 0.0)) return false;
-    const double lkk = std::sqrt(d);
+    const T lkk = sqrt(d);
     l(k, k) = lkk;
     for (int i = k + 1; i < N; ++i) {
-      double s = A(i, k);
+      T s = A(i, k);
       for (int j = 0; j < k; ++j) s -= l(i, j) * l(k, j);
       l(i, k) = s / lkk;
     }
@@ -62,11 +68,11 @@ bool SmallCholesky(const Mat<N, N>& A, Mat<N, N>* L) {
 }
 
 // L^-1 b for lower-triangular L (forward substitution).
-template <int M>
-Vec<double, M> ForwardSubstitute(const Mat<M, M>& L, const Vec<double, M>& b) {
-  Vec<double, M> y;
+template <int M, class T = double>
+Vec<T, M> ForwardSubstitute(const MatT<T, M, M>& L, const Vec<T, M>& b) {
+  Vec<T, M> y;
   for (int i = 0; i < M; ++i) {
-    double s = b(i);
+    T s = b(i);
     for (int j = 0; j < i; ++j) s -= L(i, j) * y(j);
     y(i) = s / L(i, i);
   }
@@ -76,13 +82,13 @@ Vec<double, M> ForwardSubstitute(const Mat<M, M>& L, const Vec<double, M>& b) {
 // S^-1 B for S = L L^T, L lower triangular: forward then back substitution,
 // column by column (Eigen's LLT::solve with several right-hand sides goes
 // through its blocked triangular-matrix solver).
-template <int M, int C>
-Mat<M, C> CholeskySolve(const Mat<M, M>& L, const Mat<M, C>& B) {
-  Mat<M, C> X;
+template <int M, int C, class T = double>
+MatT<T, M, C> CholeskySolve(const MatT<T, M, M>& L, const MatT<T, M, C>& B) {
+  MatT<T, M, C> X;
   for (int c = 0; c < C; ++c) {
-    const Vec<double, M> y = ForwardSubstitute<M>(L, B.col(c));
+    const Vec<T, M> y = ForwardSubstitute<M, T>(L, B.col(c));
     for (int i = M - 1; i >= 0; --i) {  // L^T x = y
-      double s = y(i);
+      T s = y(i);
       for (int j = i + 1; j < M; ++j) s -= L(j, i) * X(j, c);
       X(i, c) = s / L(i, i);
     }
@@ -90,57 +96,79 @@ Mat<M, C> CholeskySolve(const Mat<M, M>& L, const Mat<M, C>& B) {
   return X;
 }
 
+// True when every entry is finite (for any scalar: its value part).
+template <class Derived>
+bool AllFiniteT(const Eigen::MatrixBase<Derived>& a) {
+  using T = typename Derived::Scalar;
+  if constexpr (std::is_same_v<T, double>) {
+    return a.allFinite();
+  } else {
+    for (Eigen::Index i = 0; i < a.rows(); ++i)
+      for (Eigen::Index j = 0; j < a.cols(); ++j)
+        if (!std::isfinite(ScalarPart(a(i, j)))) return false;
+    return true;
+  }
+}
+
 // S = H P H^T + R,  K = P H^T S^-1, with K^T = S^-1 (H P) solved by Cholesky
-// (S = L L^T); P is symmetric so (P H^T)^T = H P. Returns false (and leaves
-// *K unset) when S is not numerically positive definite.
-template <int N, int M>
-bool KalmanGain(const Mat<M, N>& H, const Mat<N, N>& P, const Mat<M, M>& R, Mat<M, M>* S,
-                Eigen::LLT<Mat<M, M>>* llt, Mat<N, M>* K) {
-  const Mat<M, N> HP = H * P;
+// (S = L L^T); P is symmetric so (P H^T)^T = H P. Writes S and its factor L.
+// Returns false (and leaves *K unset) when S is not numerically positive
+// definite.
+template <int N, int M, class T = double>
+bool KalmanGain(const MatT<T, M, N>& H, const MatT<T, N, N>& P, const MatT<T, M, M>& R,
+                MatT<T, M, M>* S, MatT<T, M, M>* L, MatT<T, N, M>* K) {
+  const MatT<T, M, N> HP = H * P;
   S->noalias() = HP * H.transpose();
   *S += R;
-  Symmetrize(S);
-  llt->compute(*S);
-  if (llt->info() != Eigen::Success) return false;
-  const Mat<M, M> L = llt->matrixL();
-  *K = CholeskySolve<M, N>(L, HP).transpose();
-  return K->allFinite();
+  Symmetrize<M, T>(S);
+  const Eigen::LLT<MatT<T, M, M>> llt(*S);
+  if (llt.info() != Eigen::Success) return false;
+  *L = llt.matrixL();
+  *K = CholeskySolve<M, N, T>(*L, HP).transpose();
+  return AllFiniteT(*K);
 }
 
 // Joseph form, valid for any gain K:  P+ = (I - K H) P (I - K H)^T + K R K^T,
 // symmetrised.
-template <int N, int M>
-Mat<N, N> JosephUpdate(const Mat<N, N>& P, const Mat<N, M>& K, const Mat<M, N>& H,
-                       const Mat<M, M>& R) {
-  const Mat<N, N> IKH = Mat<N, N>::Identity() - K * H;
-  Mat<N, N> Pp = IKH * P * IKH.transpose() + K * R * K.transpose();
-  Symmetrize(&Pp);
+template <int N, int M, class T = double>
+MatT<T, N, N> JosephUpdate(const MatT<T, N, N>& P, const MatT<T, N, M>& K,
+                           const MatT<T, M, N>& H, const MatT<T, M, M>& R) {
+  const MatT<T, N, N> IKH = MatT<T, N, N>::Identity() - K * H;
+  MatT<T, N, N> Pp = IKH * P * IKH.transpose() + K * R * K.transpose();
+  Symmetrize<N, T>(&Pp);
   return Pp;
 }
 
-// log N(nu; 0, S) = -1/2 (log det S + nu^T S^-1 nu + M log 2 pi) with S = L L^T:
-// log det S = 2 sum_i log L_ii and nu^T S^-1 nu = |L^-1 nu|^2. Writes
-// nis = nu^T S^-1 nu when nis is not null.
-template <int M>
-double GaussianLogLikelihood(const Eigen::LLT<Mat<M, M>>& llt, const Vec<double, M>& nu,
-                             double* nis) {
-  const Mat<M, M> L = llt.matrixL();
-  const Vec<double, M> whitened = ForwardSubstitute<M>(L, nu);  // e = L^-1 nu
-  const double mahalanobis = whitened.squaredNorm();
-  double log_det = 0.0;
-  for (int i = 0; i < M; ++i) log_det += 2.0 * std::log(L(i, i));
-  if (nis != nullptr) *nis = mahalanobis;
-  return -0.5 * (log_det + mahalanobis + M * kLog2Pi);
+// The innovation of one update in whitened form: with S = L L^T,
+// e = L^-1 nu and log det S = 2 sum_i log L_ii. The likelihood term of the
+// step is log N(nu; 0, S) = -1/2 (log det S + e^T e + M log 2 pi); the
+// tuner's least-squares form uses e and log det S directly.
+template <int M, class T = double>
+void Whiten(const MatT<T, M, M>& L, const Vec<T, M>& nu, Vec<T, M>* whitened, T* log_det) {
+  using std::log;
+  *whitened = ForwardSubstitute<M, T>(L, nu);
+  T sum(0.0);
+  for (int i = 0; i < M; ++i) sum += 2.0 * log(L(i, i));
+  *log_det = sum;
+}
+template <int M, class T = double>
+T GaussianLogLikelihood(const Vec<T, M>& whitened, const T& log_det) {
+  return -0.5 * (log_det + whitened.squaredNorm() + M * kLog2Pi);
 }
 
-// Fills the diagnostics of `result` from the innovation nu and the Cholesky
-// factor of its covariance S.
+// Fills the diagnostics of `result` from the innovation nu, its covariance S
+// and the Cholesky factor L of S: nis = nu^T S^-1 nu = |L^-1 nu|^2 and
+// log_likelihood = log N(nu; 0, S).
 template <int M>
-void SetInnovation(const Vec<double, M>& nu, const Mat<M, M>& S, const Eigen::LLT<Mat<M, M>>& llt,
+void SetInnovation(const Vec<double, M>& nu, const Mat<M, M>& S, const Mat<M, M>& L,
                    StepResult<M>* result) {
+  Vec<double, M> whitened;
+  double log_det;
+  Whiten<M>(L, nu, &whitened, &log_det);
   result->innovation = nu;
   result->innovation_cov = S;
-  result->log_likelihood = GaussianLogLikelihood(llt, nu, &result->nis);
+  result->nis = whitened.squaredNorm();
+  result->log_likelihood = GaussianLogLikelihood<M>(whitened, log_det);
 }
 
 // A factor L with L L^T = C for a symmetric positive SEMI-definite C (used to
@@ -173,54 +201,63 @@ bool CovarianceSqrt(const Mat<N, N>& C, Mat<N, N>* L, std::string* why) {
   return true;
 }
 
-// Weighted mean of the columns of `points` with angle components averaged
-// relative to the first point:  m = X_0 + sum_i w_i wrap(X_i - X_0)
-// (wrap only where angle_flags is true). For non-angle components this is the
-// plain weighted mean when sum_i w_i = 1, written in the centred form, which
-// keeps the rounding error small when weights are large and of both signs
-// (scaled unscented points with small alpha).
-template <int D, std::size_t K, class Points, class Weights>
-Vec<double, D> WeightedMean(const Points& points, const Weights& weights,
-                            const std::array<bool, K>& angle_flags) {
-  const Vec<double, D> ref = points.col(0);
-  Vec<double, D> acc = Vec<double, D>::Zero();
-  for (Eigen::Index i = 1; i < points.cols(); ++i)
-    acc += weights(i) * WrapResidual<D>(points.col(i) - ref, angle_flags);
+// Moments of a weighted point set (sigma points), for any scalar. They are
+// plain weighted sums: NO angle wrapping inside a point set. A difference
+// X_i - X_j between points drawn from one Gaussian and propagated together is
+// continuous in the points; wrapping it to (-pi, pi] is only right when the
+// spread is far below pi and breaks wide priors (issue "One filter core",
+// defect 6). Angles are wrapped only where a value really jumps: innovations
+// against data, errors against truth.
+//
+// Weighted mean, centred on the reference point X_0 (the mean the points were
+// drawn from, propagated, for the unscented rule):
+//   m = X_0 + sum_{i >= 1} w_i (X_i - X_0)
+// which equals sum_i w_i X_i when sum_i w_i = 1 and keeps the rounding error
+// small when the weights are large and of both signs (scaled unscented
+// points with small alpha).
+template <int D, class Points, class Weights>
+Vec<typename Points::Scalar, D> WeightedMean(const Points& points, const Weights& weights) {
+  using T = typename Points::Scalar;
+  const Vec<T, D> ref = points.col(0);
+  Vec<T, D> acc = Vec<T, D>::Zero();
+  for (Eigen::Index i = 1; i < points.cols(); ++i) acc += weights(i) * (points.col(i) - ref);
   return ref + acc;
 }
 
-// sum_i w_i wrap(A_i - a) wrap(B_i - b)^T.
-template <int D, int E, std::size_t KA, std::size_t KB, class PointsA, class PointsB, class Weights>
-Mat<D, E> WeightedCrossCov(const PointsA& a_points, const Vec<double, D>& a_mean,
-                           const std::array<bool, KA>& a_angles, const PointsB& b_points,
-                           const Vec<double, E>& b_mean, const std::array<bool, KB>& b_angles,
-                           const Weights& weights) {
-  Mat<D, E> C = Mat<D, E>::Zero();
+// C = sum_i w_i (A_i - a)(B_i - b)^T.
+template <int D, int E, class PointsA, class PointsB, class Weights>
+MatT<typename PointsA::Scalar, D, E> WeightedCrossCov(
+    const PointsA& a_points, const Vec<typename PointsA::Scalar, D>& a_mean,
+    const PointsB& b_points, const Vec<typename PointsA::Scalar, E>& b_mean,
+    const Weights& weights) {
+  using T = typename PointsA::Scalar;
+  MatT<T, D, E> C = MatT<T, D, E>::Zero();
   for (Eigen::Index i = 0; i < a_points.cols(); ++i) {
-    const Vec<double, D> da = WrapResidual<D>(a_points.col(i) - a_mean, a_angles);
-    const Vec<double, E> db = WrapResidual<E>(b_points.col(i) - b_mean, b_angles);
+    const Vec<T, D> da = a_points.col(i) - a_mean;
+    const Vec<T, E> db = b_points.col(i) - b_mean;
     C.noalias() += weights(i) * da * db.transpose();
   }
   return C;
 }
 
-// sum_i w_i wrap(A_i - a) wrap(A_i - a)^T: WeightedCrossCov of a point set
-// with itself, each residual wrapped once.
-template <int D, std::size_t K, class Points, class Weights>
-Mat<D, D> WeightedCov(const Points& points, const Vec<double, D>& mean,
-                      const std::array<bool, K>& angles, const Weights& weights) {
-  Mat<D, D> C = Mat<D, D>::Zero();
+// C = sum_i w_i (A_i - a)(A_i - a)^T.
+template <int D, class Points, class Weights>
+MatT<typename Points::Scalar, D, D> WeightedCov(const Points& points,
+                                                const Vec<typename Points::Scalar, D>& mean,
+                                                const Weights& weights) {
+  using T = typename Points::Scalar;
+  MatT<T, D, D> C = MatT<T, D, D>::Zero();
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
-    const Vec<double, D> d = WrapResidual<D>(points.col(i) - mean, angles);
+    const Vec<T, D> d = points.col(i) - mean;
     C.noalias() += weights(i) * d * d.transpose();
   }
   return C;
 }
 
 // True when every entry of the mean and the covariance is finite.
-template <int N>
-bool BeliefFinite(const Vec<double, N>& x, const Mat<N, N>& P) {
-  return x.allFinite() && P.allFinite();
+template <int N, class T = double>
+bool BeliefFinite(const Vec<T, N>& x, const MatT<T, N, N>& P) {
+  return AllFiniteT(x) && AllFiniteT(P);
 }
 
 // What every estlab filter keeps: the belief (x, P), the last error message,

@@ -34,19 +34,13 @@
 #include <vector>
 
 #include "src/filters/filter.h"
+#include "src/filters/filter_options.h"
 #include "src/filters/filter_util.h"
+#include "src/filters/gaussian_update.h"
+#include "src/filters/kalman_step.h"
 #include "src/filters/linearize.h"
 
 namespace estlab {
-
-struct KfOptions {
-  // x*; empty = the prior mean given to Initialize().
-  std::vector<double> operating_point;
-  // u*.
-  double operating_input = 0.0;
-
-  bool IsValid(std::string* error) const;
-};
 
 template <class Model, class Meas>
 class LinearizedKf final : public FilterCommon<Model, Meas> {
@@ -64,7 +58,8 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   // Throws InputError for invalid options or an operating point of the wrong
   // length.
   LinearizedKf(const Params& params, const KfOptions& options)
-      : params_(params), u_star_(options.operating_input), input_(options.operating_input) {
+      : params_(params), input_(options.operating_input) {
+    lin_.u_star = options.operating_input;
     std::string error;
     if (!options.IsValid(&error)) throw InputError(error);
     if (!options.operating_point.empty()) {
@@ -73,7 +68,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
                          " values, model " + Model::kName + " has " + std::to_string(kN) +
                          " states");
       fixed_point_ = true;
-      for (int i = 0; i < kN; ++i) x_star_(i) = options.operating_point[i];
+      for (int i = 0; i < kN; ++i) lin_.x_star(i) = options.operating_point[i];
       Linearize();
     }
   }
@@ -83,7 +78,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   void Initialize(const State& mean, const StateCov& cov) override {
     this->SetPrior(mean, cov);
     if (!fixed_point_) {
-      x_star_ = mean;
+      lin_.x_star = mean;
       Linearize();
     }
   }
@@ -98,13 +93,11 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     if (!linear_finite_)
       return Fail(FilterStatus::kNonFinite, "the linearisation (A, B, c, H) is not finite");
     Discretize(dt);
-    // delta = wrap(x - x*);  x- = x* + Phi delta + Gamma (u - u*) + d
-    const State delta = WrapResidual<kN>(x_ - x_star_, Model::kAngleStates);
-    const State x_pred = x_star_ + phi_ * delta + gamma_ * (input_ - u_star_) + drift_;
-    // P- = Phi P Phi^T + Q
-    StateCov P_pred = phi_ * P_ * phi_.transpose() + Q;
-    Symmetrize(&P_pred);
-    if (!BeliefFinite(x_pred, P_pred))
+    // x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
+    State x_pred = x_;
+    StateCov P_pred = P_;
+    KfPredict<Model, kM>(lin_, step_, input_, Q, &x_pred, &P_pred);
+    if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
     x_ = x_pred;
     P_ = P_pred;
@@ -114,31 +107,19 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
       return FailResult(ready, error_);
-    // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
-    const State delta = WrapResidual<kN>(x_ - x_star_, Model::kAngleStates);
-    const Measurement z_pred = h_star_ + H_ * delta;
-    const Measurement nu = WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
-    // S = H P H^T + R,  K = P H^T S^-1
-    MeasurementCov S;
-    Eigen::LLT<MeasurementCov> llt;
-    Mat<kN, kM> K;
-    if (!KalmanGain<kN, kM>(H_, P_, R, &S, &llt, &K))
-      return FailResult(FilterStatus::kFactorizationFailed,
-                        "Cholesky of the innovation covariance S = H P H^T + R failed");
+    GaussianUpdate<double, kN, kM> u;
+    std::string why;
+    const FilterStatus status = KfUpdate<Model, Meas>(lin_, x_, P_, z, R, &u, &why);
+    if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation(nu, S, llt, &result);
-    // x+ = x- + K nu;  P+ = (I - K H) P (I - K H)^T + K R K^T
-    const State x_post = x_ + K * nu;
-    const StateCov P_post = JosephUpdate<kN, kM>(P_, K, H_, R);
-    if (!BeliefFinite(x_post, P_post))
-      return FailResult(FilterStatus::kNonFinite, "updated mean or covariance is not finite");
-    x_ = x_post;
-    P_ = P_post;
-    result.gain = K;
+    SetInnovation<kM>(u.nu, u.S, u.L, &result);
+    x_ = u.x;
+    P_ = u.P;
+    result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x*) - H wrap(x+ - x*))
-    result.residual =
-        WrapResidual<kM>(z - h_star_ - H_ * WrapResidual<kN>(x_ - x_star_, Model::kAngleStates),
-                         Meas::kAngleOutputs);
+    result.residual = WrapResidual<kM>(
+        z - lin_.h_star - lin_.H * WrapResidual<kN>(x_ - lin_.x_star, Model::kAngleStates),
+        Meas::kAngleOutputs);
     return result;
   }
 
@@ -146,22 +127,25 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   const Mat<kN, kN>& A() const { return A_; }
   const Vec<double, kN>& B() const { return B_; }
   const Vec<double, kN>& c() const { return c_; }
-  const Mat<kM, kN>& H() const { return H_; }
-  const State& operating_point() const { return x_star_; }
-  // The discretisation of the last Predict (Phi, Gamma, d above).
-  const Mat<kN, kN>& Phi() const { return phi_; }
-  const Vec<double, kN>& Gamma() const { return gamma_; }
-  const Vec<double, kN>& d() const { return drift_; }
+  const Mat<kM, kN>& H() const { return lin_.H; }
+  const State& operating_point() const { return lin_.x_star; }
+  // What the steps (kalman_step.h) use: the linearisation, and the
+  // discretisation of the last Predict (Phi, Gamma, d above).
+  const KfLinearization<kN, kM>& linearization() const { return lin_; }
+  const KfDiscretization<kN>& discretization() const { return step_; }
+  const Mat<kN, kN>& Phi() const { return step_.phi; }
+  const Vec<double, kN>& Gamma() const { return step_.gamma; }
+  const Vec<double, kN>& d() const { return step_.drift; }
 
  private:
   // A = df/dx, B = df/du, c = f(x*, u*), h* = h(x*), H = dh/dx at (x*, u*).
   void Linearize() {
-    A_ = ContinuousJacobian<Model>(x_star_, u_star_, params_);
-    B_ = InputJacobian<Model>(x_star_, u_star_, params_);
-    c_ = ContinuousRhs<Model>(x_star_, u_star_, params_);
-    h_star_ = MeasurementAndJacobian<Model, Meas>(x_star_, params_, &H_);
+    A_ = ContinuousJacobian<Model>(lin_.x_star, lin_.u_star, params_);
+    B_ = InputJacobian<Model>(lin_.x_star, lin_.u_star, params_);
+    c_ = ContinuousRhs<Model>(lin_.x_star, lin_.u_star, params_);
+    lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, params_, &lin_.H);
     linear_finite_ =
-        A_.allFinite() && B_.allFinite() && c_.allFinite() && H_.allFinite() && h_star_.allFinite();
+        A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() && lin_.h_star.allFinite();
     cached_dt_ = -1.0;  // invalidate the discretisation cache
   }
 
@@ -174,9 +158,9 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     augmented.template block<kN, 1>(0, kN) = B_ * dt;
     augmented.template block<kN, 1>(0, kN + 1) = c_ * dt;
     const Mat<kN + 2, kN + 2> e = augmented.exp();
-    phi_ = e.template topLeftCorner<kN, kN>();
-    gamma_ = e.template block<kN, 1>(0, kN);
-    drift_ = e.template block<kN, 1>(0, kN + 1);
+    step_.phi = e.template topLeftCorner<kN, kN>();
+    step_.gamma = e.template block<kN, 1>(0, kN);
+    step_.drift = e.template block<kN, 1>(0, kN + 1);
     cached_dt_ = dt;
   }
 
@@ -189,18 +173,13 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   Params params_;
   bool fixed_point_ = false;
   bool linear_finite_ = false;
-  State x_star_ = State::Zero();
-  double u_star_;
+  KfLinearization<kN, kM> lin_;  // x*, u*, h(x*), H
   double input_;
   Mat<kN, kN> A_ = Mat<kN, kN>::Zero();
   Vec<double, kN> B_ = Vec<double, kN>::Zero();
   Vec<double, kN> c_ = Vec<double, kN>::Zero();
-  Measurement h_star_ = Measurement::Zero();
-  Mat<kM, kN> H_ = Mat<kM, kN>::Zero();
   double cached_dt_ = -1.0;
-  Mat<kN, kN> phi_ = Mat<kN, kN>::Identity();
-  Vec<double, kN> gamma_ = Vec<double, kN>::Zero();
-  Vec<double, kN> drift_ = Vec<double, kN>::Zero();
+  KfDiscretization<kN> step_;  // Phi, Gamma, d of cached_dt_
 };
 
 }  // namespace estlab

@@ -17,9 +17,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "src/core/types.h"
 #include "src/ode/autodiff.h"
+#include "src/ode/nested_jet.h"
 
 namespace estlab {
 
@@ -59,15 +61,22 @@ Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>&
   return (f(u - 2.0 * h) - 8.0 * f(u - h) + 8.0 * f(u + h) - f(u + 2.0 * h)) / (12.0 * h);
 }
 
-// h(x), and H = dh/dx (x) by automatic differentiation when H is not null.
-template <class Model, class Meas>
-Vec<double, Meas::kDim> MeasurementAndJacobian(const Vec<double, Model::kStateDim>& x,
-                                               const typename Model::Params& params,
-                                               Mat<Meas::kDim, Model::kStateDim>* H) {
+// h(x), and H = dh/dx (x) by automatic differentiation when H is not null,
+// for x of any scalar T (double; ceres::Jet, whose H is then a nested Jet:
+// src/ode/nested_jet.h).
+template <class Model, class Meas, class T = double>
+Vec<T, Meas::kDim> MeasurementAndJacobian(const Vec<T, Model::kStateDim>& x,
+                                          const typename Model::Params& params,
+                                          std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  if (H == nullptr) return Meas::Eval(x, params);
-  return ValueAndJacobian<M, N>([&](const auto& xj) { return Meas::Eval(xj, params); }, x, H);
+  if (H == nullptr) return Meas::template Eval<T>(x, params);
+  return ValueAndJacobianT<M, N>(
+      [&](const auto& xj) {
+        using S = typename std::decay_t<decltype(xj)>::Scalar;
+        return Meas::template Eval<S>(xj, params);
+      },
+      x, H);
 }
 
 }  // namespace estlab

@@ -21,12 +21,14 @@
 //   log_likelihood = log sum_i w_i p_i              (log-sum-exp)
 //   w_i <- w_i p_i / sum_j w_j p_j,  ESS = 1 / sum_i w_i^2
 //   resample (options.resample) when ESS < ess_threshold N; weights -> 1/N
-//   z^ = sum_i w_i h(x_i) (before the update; circular for angle outputs),
+//   z^ = sum_i w_i h(x_i) (before the update),
 //   innovation = wrap(z - z^), innovation_cov = sum_i w_i dh_i dh_i^T + R
 // Estimate (after Predict and Update, from the weighted particles before any
-// resampling): mean = sum_i w_i x_i, and for angle states the circular mean
-// atan2(sum_i w_i sin x_i, sum_i w_i cos x_i), put on the branch nearest the
-// previous estimate; cov = sum_i w_i d_i d_i^T, d_i = wrap(x_i - mean).
+// resampling): mean = sum_i w_i x_i, cov = sum_i w_i d_i d_i^T,
+// d_i = x_i - mean. Particles are never wrapped, so these are plain weighted
+// moments for angle states too, as in the Gaussian filters (filter_util.h,
+// WeightedMean): a circular mean would be another estimator, and wrapping
+// inside the cloud breaks wide priors.
 //
 // WARNING: Initialize() restarts the generator from options.seed, so two runs
 // with the same seed and data give identical results; use a different seed
@@ -45,27 +47,12 @@
 
 #include "src/core/random.h"
 #include "src/filters/filter.h"
+#include "src/filters/filter_options.h"
 #include "src/filters/filter_util.h"
 #include "src/filters/ziggurat.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
-
-enum class ResampleScheme { kMultinomial, kSystematic, kStratified, kResidual };
-
-// Parses "multinomial", "systematic", "stratified", "residual"; throws InputError.
-ResampleScheme ParseResampleScheme(const std::string& name);
-const char* ResampleSchemeName(ResampleScheme scheme);
-
-struct ParticleOptions {
-  int num_particles = 1000;
-  ResampleScheme resample = ResampleScheme::kSystematic;
-  // Resample when ESS < ess_threshold * N; 1 = every step, 0 = never.
-  double ess_threshold = 0.5;
-  uint64_t seed = 1;
-
-  bool IsValid(std::string* error) const;
-};
 
 // Draws N = weights.size() ancestor indices (ascending) with
 // E[number of copies of i] = N w_i. `weights` must be non-negative and sum to
@@ -165,22 +152,22 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     // log p_i = log N(wrap(z - h(x_i)); 0, R) = c - |L^-1 nu_i|^2 / 2 with
     // R = L L^T and c = -(log det R + m log 2 pi) / 2 computed once.
     const Eigen::Index n = particles_.cols();
-    const double log_norm =
-        GaussianLogLikelihood<kM>(r_llt, Measurement(Measurement::Zero()), nullptr);
-    const auto r_lower = r_llt.matrixL();
+    const MeasurementCov r_lower = r_llt.matrixL();
+    Measurement zero_whitened;
+    double log_det_r;
+    Whiten<kM>(r_lower, Measurement(Measurement::Zero()), &zero_whitened, &log_det_r);
+    const double log_norm = GaussianLogLikelihood<kM>(zero_whitened, log_det_r);
     for (Eigen::Index i = 0; i < n; ++i) {
       predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
       const Measurement nu_i =
           WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
-      const Measurement whitened = r_lower.solve(nu_i);  // L^-1 nu_i
+      const Measurement whitened = r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
       log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
     }
     // Predicted-measurement moments with the prior weights:
     // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)
-    const Measurement z_pred =
-        Mean<kM>(predicted_measurements_, Meas::kAngleOutputs, Meas::Eval(x_, params_));
-    MeasurementCov S =
-        WeightedCov<kM>(predicted_measurements_, z_pred, Meas::kAngleOutputs, weight_vector());
+    const Measurement z_pred = Mean<kM>(predicted_measurements_);
+    MeasurementCov S = WeightedCov<kM>(predicted_measurements_, z_pred, weight_vector());
     S += R;
     Symmetrize(&S);
     const Eigen::LLT<MeasurementCov> s_llt(S);
@@ -188,7 +175,8 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the predicted-measurement covariance failed");
     StepResult<kM> result;
-    SetInnovation(WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs), S, s_llt, &result);
+    SetInnovation<kM>(WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs), S,
+                      MeasurementCov(s_llt.matrixL()), &result);
     // log_likelihood = log sum_i w_i p_i = m + log sum_i exp(l_i - m) with
     // l_i = log w_i + log p_i, m = max_i l_i (log-sum-exp; one exp per
     // particle, reused for the weights):
@@ -254,34 +242,18 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     log_weights_.setConstant(-std::log(n));
   }
 
-  // Weighted mean of the columns of `points`; angle components by the circular
-  // mean atan2(sum w sin, sum w cos), on the branch nearest `reference`.
-  template <int D, std::size_t K, class Points>
-  Vec<double, D> Mean(const Points& points, const std::array<bool, K>& angle_flags,
-                      const Vec<double, D>& reference) const {
-    Vec<double, D> m = Vec<double, D>::Zero(), s = Vec<double, D>::Zero(),
-                   c = Vec<double, D>::Zero();
-    for (Eigen::Index i = 0; i < points.cols(); ++i) {
-      const double w = weights_[i];
-      for (int j = 0; j < D; ++j) {
-        if (angle_flags[j]) {
-          s(j) += w * std::sin(points(j, i));
-          c(j) += w * std::cos(points(j, i));
-        } else {
-          m(j) += w * points(j, i);
-        }
-      }
-    }
-    for (int j = 0; j < D; ++j)
-      if (angle_flags[j]) m(j) = reference(j) + WrapAngle(std::atan2(s(j), c(j)) - reference(j));
+  // m = sum_i w_i X_i with the current weights (no wrapping: see the header).
+  template <int D, class Points>
+  Vec<double, D> Mean(const Points& points) const {
+    Vec<double, D> m = Vec<double, D>::Zero();
+    for (Eigen::Index i = 0; i < points.cols(); ++i) m += weights_[i] * points.col(i);
     return m;
   }
 
   void ComputeMoments() {
-    const State reference = x_;
-    x_ = Mean<kN>(particles_, Model::kAngleStates, reference);
-    P_ = WeightedCov<kN>(particles_, x_, Model::kAngleStates, weight_vector());
-    Symmetrize(&P_);
+    x_ = Mean<kN>(particles_);
+    P_ = WeightedCov<kN>(particles_, x_, weight_vector());
+    Symmetrize<kN>(&P_);
   }
 
   void ResampleParticles() {

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "src/core/types.h"
 
@@ -143,6 +144,30 @@ UnitSigmaPoints MakeUnitSigmaPoints(int n, const SigmaPointOptions& options) {
     }
   }
   return unit;
+}
+
+SigmaPointSet MakeSigmaPointSet(int n, const SigmaPointOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError(error);
+  UnitSigmaPoints unit = MakeUnitSigmaPoints(n, options);
+  SigmaPointSet set;
+  set.unit_points = std::move(unit.points);
+  set.mean_weights = std::move(unit.mean_weights);
+  set.cov_weights = std::move(unit.cov_weights);
+  set.jitter = options.jitter;
+  const Eigen::Index count = set.unit_points.cols();
+  set.axis_index.assign(count, -1);
+  set.axis_scale.setZero(count);
+  set.axis_aligned = true;
+  for (Eigen::Index i = 0; i < count && set.axis_aligned; ++i) {
+    for (int k = 0; k < n; ++k) {
+      if (set.unit_points(k, i) == 0.0) continue;
+      if (set.axis_index[i] >= 0) set.axis_aligned = false;
+      set.axis_index[i] = k;
+      set.axis_scale(i) = set.unit_points(k, i);
+    }
+  }
+  return set;
 }
 
 }  // namespace estlab

@@ -33,6 +33,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 namespace estlab {
 
@@ -74,6 +75,22 @@ struct UnitSigmaPoints {
 };
 
 // Largest Gauss-Hermite point set accepted (p^n).
+// The unit points of a rule with what drawing them needs, made once per
+// filter (and per likelihood): the points xi_i, weights Wm_i, Wc_i, the
+// jitter, and whether every xi_i lies on an axis (unscented and cubature:
+// xi_i = s_i e_k, so L xi_i = s_i L e_k, a scaled column of L instead of a
+// matrix-vector product; the same numbers: the other terms are exact zeros).
+struct SigmaPointSet {
+  Eigen::MatrixXd unit_points;  // n x count
+  Eigen::VectorXd mean_weights, cov_weights;
+  double jitter = 0.0;
+  bool axis_aligned = false;
+  std::vector<int> axis_index;  // -1: xi_i = 0
+  Eigen::VectorXd axis_scale;
+};
+// Throws InputError for invalid options.
+SigmaPointSet MakeSigmaPointSet(int n, const SigmaPointOptions& options);
+
 inline constexpr long kMaxSigmaPoints = 200000;
 
 // Number of points of the rule in n dimensions (p^n may exceed int; long).

@@ -37,6 +37,7 @@ ModelEntry MakeModelEntry() {
   for (const char* s : Model::kInvariantNames) e.invariants.push_back(s);
   e.has_input = Model::kHasInput;
   e.stiff = Model::kStiff;
+  for (const auto& pair : Model::kPositionRatePairs) e.position_rate_pairs.push_back(pair);
   e.simulate = &Simulate<Model>;
   e.tune = &TuneModel<Model>;  // instantiated in adaptive/tune_<model>.cpp
   e.run_filter = &RunFilter<Model>;

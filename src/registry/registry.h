@@ -76,6 +76,7 @@ struct ModelEntry {
   std::string description;
   std::vector<std::string> states;
   std::vector<bool> angle_states;
+  std::vector<std::pair<int, int>> position_rate_pairs;  // (position, rate) state indices
   std::vector<ParamDesc> params;
   std::vector<MeasurementDesc> measurements;
   std::vector<std::string> invariants;

@@ -19,25 +19,23 @@
 #include <string>
 #include <vector>
 
-#include "adaptive/noise_adapter.h"
+#include "src/core/white_accel.h"
 #include "src/filters/ekf.h"
 #include "src/filters/kalman.h"
+#include "src/filters/noise_adapter.h"
 #include "src/filters/particle.h"
 #include "src/filters/sigma_point.h"
 #include "src/registry/model_traits.h"
+#include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
+#include "src/run/step_loop.h"
 
 namespace estlab {
 
 template <class Model>
 Mat<Model::kStateDim, Model::kStateDim> WhiteAccelQ(double qc, double dt) {
-  constexpr int N = Model::kStateDim;
-  Mat<N, N> Q = Mat<N, N>::Zero();
-  for (const auto& [pos, rate] : Model::kPositionRatePairs) {
-    Q(pos, pos) = qc * dt * dt * dt / 3.0;
-    Q(pos, rate) = Q(rate, pos) = qc * dt * dt / 2.0;
-    Q(rate, rate) = qc * dt;
-  }
+  Mat<Model::kStateDim, Model::kStateDim> Q;
+  FillWhiteAccel(Model::kPositionRatePairs, qc, dt, &Q);
   return Q;
 }
 
@@ -49,50 +47,27 @@ Mat<R, C> MatFromVector(const std::vector<double>& v) {
   return A;
 }
 
+// The filter of spec.kind (options from spec: filter_options.h). Throws
+// InputError for invalid options. Adding a filter kind: its case here.
 template <class Model, class Meas>
 std::unique_ptr<Filter<Model, Meas>> MakeFilter(const FilterSpec& spec,
                                                 const typename Model::Params& params,
                                                 Transition<Model>* transition) {
-  std::string error;
   switch (spec.kind) {
-    case FilterKind::kKf: {
-      KfOptions o;
-      o.operating_point = spec.linearize_at;
-      o.operating_input = spec.input;
-      if (!o.IsValid(&error)) throw InputError(error);
-      return std::make_unique<LinearizedKf<Model, Meas>>(params, o);
-    }
-    case FilterKind::kEkf: {
-      EkfOptions o;
-      o.iterations = spec.iterations;
-      if (!o.IsValid(&error)) throw InputError(error);
-      return std::make_unique<Ekf<Model, Meas>>(transition, params, o);
-    }
-    case FilterKind::kPf: {
-      ParticleOptions o;
-      o.num_particles = spec.particles;
-      o.resample = ParseResampleScheme(spec.resample);
-      o.ess_threshold = spec.ess_threshold;
-      o.seed = spec.seed;
-      if (!o.IsValid(&error)) throw InputError(error);
-      return std::make_unique<ParticleFilter<Model, Meas>>(transition, params, o);
-    }
-    default: {
-      SigmaPointOptions o;
-      o.rule = spec.kind == FilterKind::kUkf   ? SigmaRule::kUnscented
-               : spec.kind == FilterKind::kCkf ? SigmaRule::kCubature
-                                               : SigmaRule::kGaussHermite;
-      o.alpha = spec.alpha;
-      o.beta = spec.beta;
-      o.kappa = spec.kappa;
-      o.gh_order = spec.gh_order;
-      o.update = spec.sigma_redraw ? SigmaPointOptions::Update::kRedraw
-                                   : SigmaPointOptions::Update::kPropagate;
-      o.jitter = spec.jitter;
-      if (!o.IsValid(&error)) throw InputError(error);
-      return std::make_unique<SigmaPointFilter<Model, Meas>>(transition, params, o);
-    }
+    case FilterKind::kKf:
+      return std::make_unique<LinearizedKf<Model, Meas>>(params, KfOptionsOf(spec));
+    case FilterKind::kEkf:
+      return std::make_unique<Ekf<Model, Meas>>(transition, params, EkfOptionsOf(spec));
+    case FilterKind::kUkf:
+    case FilterKind::kCkf:
+    case FilterKind::kGhkf:
+      return std::make_unique<SigmaPointFilter<Model, Meas>>(transition, params,
+                                                             SigmaPointOptionsOf(spec));
+    case FilterKind::kPf:
+      return std::make_unique<ParticleFilter<Model, Meas>>(transition, params,
+                                                           ParticleOptionsOf(spec));
   }
+  throw InputError("unknown filter kind");
 }
 
 template <class Model, class Meas>
@@ -103,11 +78,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   const auto start = std::chrono::steady_clock::now();
   const typename Model::Params params = ParamsFromVector<Model>(spec.params);
   auto transition = MakeTransition<Model>(params, spec.transition);
-  transition->SetInput(spec.input);
   auto filter = MakeFilter<Model, Meas>(spec, params, transition.get());
-  if (spec.kind == FilterKind::kKf) {
-    static_cast<LinearizedKf<Model, Meas>*>(filter.get())->SetInput(spec.input);
-  }
+  filter->SetInput(spec.input);  // the transition's, or the KF's own
 
   std::optional<NoiseAdapter<N, M>> adapter;
   if (!spec.adapt.rule.empty()) adapter.emplace(spec.adapt);
@@ -138,8 +110,6 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
   filter->Initialize(ToVec<N>(spec.x0), MatFromVector<N, N>(spec.p0));
-  const size_t rows = data.t.size();
-  double t_prev = spec.has_t0 ? spec.t0 : (rows ? data.t[0] : 0.0);
   std::vector<double> sq_err(N, 0.0), abs_err(N, 0.0);
   double nis_sum = 0.0, nees_sum = 0.0;
   long nees_count = 0;
@@ -150,40 +120,24 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
     s.message = "filter " + s.filter + " stopped at step " + std::to_string(k) + " (t = " +
                 FormatNumber(data.t[k]) + ", " + data.path + " line " +
                 std::to_string(k < data.lines.size() ? data.lines[k] : 0) + "): " + what;
+    return false;
   };
-
-  for (size_t k = 0; k < rows; ++k) {
-    const double t = data.t[k];
-    const double u = data.has_input ? data.u[k > 0 ? k - 1 : 0] : spec.input;
-    if (t > t_prev) {
-      transition->SetInput(u);
-      if (spec.kind == FilterKind::kKf)
-        static_cast<LinearizedKf<Model, Meas>*>(filter.get())->SetInput(u);
-      if (spec.q_white_accel && !q_adapted) Q = WhiteAccelQ<Model>(spec.qc, t - t_prev);
-      const FilterStatus st = filter->Predict(t_prev, t, Q);
-      if (st != FilterStatus::kOk) {
-        fail(k, std::string("prediction failed: ") + FilterStatusName(st) +
-                    (filter->last_error().empty() ? "" : " - " + filter->last_error()));
-        break;
-      }
-    }
-    t_prev = t;
+  auto predict = [&](size_t k, double t0, double t1, double u) {
+    filter->SetInput(u);
+    if (spec.q_white_accel && !q_adapted) Q = WhiteAccelQ<Model>(spec.qc, t1 - t0);
+    const FilterStatus st = filter->Predict(t0, t1, Q);
+    if (st == FilterStatus::kOk) return true;
+    return fail(k, std::string("prediction failed: ") + FilterStatusName(st) +
+                       (filter->last_error().empty() ? "" : " - " + filter->last_error()));
+  };
+  auto row = [&](size_t k, const Vec<double, M>* z) {
     const StateCov p_pred = filter->cov();
-
-    Vec<double, M> z;
-    bool have_z = true;
-    for (int j = 0; j < M; ++j) {
-      z(j) = data.z[k * M + j];
-      if (!std::isfinite(z(j))) have_z = false;
-    }
     StepResult<M> r;
-    if (have_z) {
-      r = filter->Update(z, R);
-      if (r.status != FilterStatus::kOk) {
-        fail(k, std::string("update failed: ") + FilterStatusName(r.status) +
-                    (r.message.empty() ? "" : " - " + r.message));
-        break;
-      }
+    if (z != nullptr) {
+      r = filter->Update(*z, R);
+      if (r.status != FilterStatus::kOk)
+        return fail(k, std::string("update failed: ") + FilterStatusName(r.status) +
+                           (r.message.empty() ? "" : " - " + r.message));
       ++s.updates;
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
@@ -194,28 +148,21 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
     }
     const auto& x = filter->mean();
     const StateCov& P = filter->cov();
-    if (!x.allFinite() || !P.allFinite()) {
-      fail(k, "the estimate or its covariance is not finite");
-      break;
-    }
-    if (P.trace() > spec.max_cov_trace) {
-      fail(k, "trace(P) = " + FormatNumber(P.trace()) + " exceeds " +
-                  FormatNumber(spec.max_cov_trace));
-      break;
-    }
-
-    std::vector<double> row;
-    row.reserve(cols.size());
-    row.push_back(t);
-    for (int i = 0; i < N; ++i) row.push_back(x(i));
-    for (int i = 0; i < N; ++i) row.push_back(P(i, i));
+    std::string why;
+    if (!WithinDivergenceGuard<N>(x, P, spec.max_cov_trace, &why)) return fail(k, why);
+    const bool have_z = z != nullptr;
+    std::vector<double> out_row;
+    out_row.reserve(cols.size());
+    out_row.push_back(data.t[k]);
+    for (int i = 0; i < N; ++i) out_row.push_back(x(i));
+    for (int i = 0; i < N; ++i) out_row.push_back(P(i, i));
     if (spec.full_cov) {
       for (int i = 0; i < N; ++i)
-        for (int j = i + 1; j < N; ++j) row.push_back(P(i, j));
+        for (int j = i + 1; j < N; ++j) out_row.push_back(P(i, j));
     }
-    for (int j = 0; j < M; ++j) row.push_back(have_z ? r.innovation(j) : nan);
-    row.push_back(have_z ? r.nis : nan);
-    row.push_back(have_z ? r.log_likelihood : nan);
+    for (int j = 0; j < M; ++j) out_row.push_back(have_z ? r.innovation(j) : nan);
+    out_row.push_back(have_z ? r.nis : nan);
+    out_row.push_back(have_z ? r.log_likelihood : nan);
     if (data.has_truth) {
       Vec<double, N> e;
       bool truth_ok = true;
@@ -237,12 +184,14 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
           abs_err[i] += std::abs(e(i));
         }
       }
-      for (int i = 0; i < N; ++i) row.push_back(e(i));
-      row.push_back(nees);
+      for (int i = 0; i < N; ++i) out_row.push_back(e(i));
+      out_row.push_back(nees);
     }
-    out.rows.push_back(std::move(row));
+    out.rows.push_back(std::move(out_row));
     ++s.steps;
-  }
+    return true;
+  };
+  ForEachStep<M>(spec, data, predict, row);
 
   if (data.has_truth && s.steps > 0) {
     for (int i = 0; i < N; ++i) {

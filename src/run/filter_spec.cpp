@@ -3,6 +3,7 @@
 #include <boost/math/distributions/chi_squared.hpp>
 
 #include "src/core/types.h"
+#include "src/run/filter_options.h"
 
 namespace estlab {
 
@@ -32,6 +33,72 @@ const char* FilterKindName(FilterKind kind) {
       return "pf";
   }
   return "?";
+}
+
+KfOptions KfOptionsOf(const FilterSpec& spec) {
+  KfOptions o;
+  o.operating_point = spec.linearize_at;
+  o.operating_input = spec.input;
+  return o;
+}
+
+EkfOptions EkfOptionsOf(const FilterSpec& spec) {
+  EkfOptions o;
+  o.iterations = spec.iterations;
+  return o;
+}
+
+SigmaPointOptions SigmaPointOptionsOf(const FilterSpec& spec) {
+  SigmaPointOptions o;
+  switch (spec.kind) {
+    case FilterKind::kUkf:
+      o.rule = SigmaRule::kUnscented;
+      break;
+    case FilterKind::kCkf:
+      o.rule = SigmaRule::kCubature;
+      break;
+    case FilterKind::kGhkf:
+      o.rule = SigmaRule::kGaussHermite;
+      break;
+    case FilterKind::kKf:
+    case FilterKind::kEkf:
+    case FilterKind::kPf:
+      throw InputError(std::string("filter ") + FilterKindName(spec.kind) +
+                       " has no sigma-point rule");
+  }
+  o.alpha = spec.alpha;
+  o.beta = spec.beta;
+  o.kappa = spec.kappa;
+  o.gh_order = spec.gh_order;
+  o.update = spec.sigma_redraw ? SigmaPointOptions::Update::kRedraw
+                               : SigmaPointOptions::Update::kPropagate;
+  o.jitter = spec.jitter;
+  return o;
+}
+
+ParticleOptions ParticleOptionsOf(const FilterSpec& spec) {
+  ParticleOptions o;
+  o.num_particles = spec.particles;
+  o.resample = ParseResampleScheme(spec.resample);
+  o.ess_threshold = spec.ess_threshold;
+  o.seed = spec.seed;
+  return o;
+}
+
+bool IsValidFilterOptions(const FilterSpec& spec, std::string* error) {
+  switch (spec.kind) {
+    case FilterKind::kKf:
+      return KfOptionsOf(spec).IsValid(error);
+    case FilterKind::kEkf:
+      return EkfOptionsOf(spec).IsValid(error);
+    case FilterKind::kUkf:
+    case FilterKind::kCkf:
+    case FilterKind::kGhkf:
+      return SigmaPointOptionsOf(spec).IsValid(error);
+    case FilterKind::kPf:
+      return ParticleOptionsOf(spec).IsValid(error);
+  }
+  return false;
 }
 
 void ChiSquareBounds95(long steps, int dim, double bounds[2]) {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "src/filters/filter_options.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -17,15 +18,6 @@ enum class FilterKind { kKf, kEkf, kUkf, kCkf, kGhkf, kPf };
 FilterKind ParseFilterKind(const std::string& name);
 const char* FilterKindName(FilterKind kind);
 
-// Online noise adaptation of the sigma-point filter (adaptive/).
-struct AdaptSpec {
-  std::string rule;        // "" (off), "sage-husa", "innovation-matching"
-  bool adapt_q = false;
-  bool adapt_r = true;
-  double forgetting = 0.97;  // Sage-Husa b
-  int window = 30;           // innovation matching N
-  double eigen_floor = 1e-10;
-};
 
 struct FilterSpec {
   std::vector<double> params;  // model parameters in registry order

@@ -184,7 +184,7 @@ TEST(StudyConfig, WhiteAccelPairsMatchEveryModel) {
     data.z.assign(2 * m, 0.1);
     const FilterRunOutput out = model->run_filter(spec, data);
     ASSERT_EQ(out.summary.final_q.size(), size_t(n * n)) << model->name;
-    const std::vector<double> ours = WhiteAccelCovariance(n, 2.0, 0.2);
+    const std::vector<double> ours = WhiteAccelCovariance(*model, 2.0, 0.2);
     for (int k = 0; k < n * n; ++k)
       EXPECT_NEAR(out.summary.final_q[k], ours[k], 1e-15) << model->name << " entry " << k;
   }

@@ -20,8 +20,8 @@
 // WARNING: only the operations the models use are provided (+ - * /, sin,
 // cos, tan, exp, log, sqrt, pow, abs, atan2, tanh, comparisons). A model that
 // calls something else fails to compile here, not silently.
-#ifndef ESTLAB_ADAPTIVE_NESTED_JET_H_
-#define ESTLAB_ADAPTIVE_NESTED_JET_H_
+#ifndef ESTLAB_ODE_NESTED_JET_H_
+#define ESTLAB_ODE_NESTED_JET_H_
 
 #include <ceres/jet.h>
 
@@ -146,24 +146,49 @@ inline NestedJet<K, N> atan2(const NestedJet<K, N>& y, const NestedJet<K, N>& x)
   return NestedJet<K, N>(typename NestedJet<K, N>::Base(ceres::atan2(y.j, x.j)));
 }
 
-// The value part of double, Jet, nested Jet: used for control flow (angle
-// wrapping, divergence checks), never for derivatives.
-inline double ScalarPart(double x) { return x; }
-template <class T, int N>
-double ScalarPart(const ceres::Jet<T, N>& x) {
-  return ScalarPart(x.a);
-}
+// The value part of a nested Jet (ScalarPart of double and Jet: types.h).
 template <int K, int N>
 double ScalarPart(const NestedJet<K, N>& x) {
   return x.scalar();
 }
 
-// Wraps an angle-valued quantity to (-pi, pi] by shifting its value by a
-// multiple of 2 pi; derivatives are unchanged.
-template <class T>
-T WrapAngleT(const T& a) {
-  const double value = ScalarPart(a);
-  return a + (WrapAngle(value) - value);
+// The Jet type that carries d/dx (N directions) on top of scalar T: a plain
+// Jet for T = double, a NestedJet for T = Jet<double, K>.
+template <class T, int N>
+struct Tangent;
+template <int N>
+struct Tangent<double, N> {
+  using type = ceres::Jet<double, N>;
+  static type Seed(double v, int i) { return type(v, i); }
+  static double Value(const type& y) { return y.a; }
+  static double Deriv(const type& y, int c) { return y.v(c); }
+};
+template <int K, int N>
+struct Tangent<ceres::Jet<double, K>, N> {
+  using Inner = ceres::Jet<double, K>;
+  using type = NestedJet<K, N>;
+  static type Seed(const Inner& v, int i) { return type(typename type::Base(v, i)); }
+  static Inner Value(const type& y) { return y.j.a; }
+  static Inner Deriv(const type& y, int c) { return y.j.v(c); }
+};
+
+// f(x) and its Jacobian df/dx for x of any scalar T (see Tangent); the
+// Jacobian is skipped when null. For T = double this is ValueAndJacobian
+// (autodiff.h).
+template <int Mout, int N, class T, class F>
+Eigen::Matrix<T, Mout, 1> ValueAndJacobianT(F&& f, const Eigen::Matrix<T, N, 1>& x,
+                                            Eigen::Matrix<T, Mout, N>* jacobian) {
+  using Tg = Tangent<T, N>;
+  Eigen::Matrix<typename Tg::type, N, 1> xs;
+  for (int i = 0; i < N; ++i) xs(i) = Tg::Seed(x(i), i);
+  const Eigen::Matrix<typename Tg::type, Mout, 1> y = f(xs);
+  Eigen::Matrix<T, Mout, 1> value;
+  for (int r = 0; r < Mout; ++r) {
+    value(r) = Tg::Value(y(r));
+    if (jacobian != nullptr)
+      for (int c = 0; c < N; ++c) (*jacobian)(r, c) = Tg::Deriv(y(r), c);
+  }
+  return value;
 }
 
 }  // namespace estlab
@@ -205,4 +230,4 @@ struct ScalarBinaryOpTraits<double, estlab::NestedJet<K, N>, BinaryOp> {
 
 }  // namespace Eigen
 
-#endif  // ESTLAB_ADAPTIVE_NESTED_JET_H_
+#endif  // ESTLAB_ODE_NESTED_JET_H_

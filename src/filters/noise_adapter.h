@@ -18,8 +18,8 @@
 //     with H P+ H^T = (S - R) - (S - R) S^-1 (S - R) (needs no Jacobian).
 // The result is symmetrised and its eigenvalues clipped to `eigen_floor`
 // so Q and R stay positive definite; clip_count() says how often that bit.
-#ifndef ESTLAB_ADAPTIVE_NOISE_ADAPTER_H_
-#define ESTLAB_ADAPTIVE_NOISE_ADAPTER_H_
+#ifndef ESTLAB_FILTERS_NOISE_ADAPTER_H_
+#define ESTLAB_FILTERS_NOISE_ADAPTER_H_
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -28,7 +28,7 @@
 
 #include "src/core/types.h"
 #include "src/filters/filter.h"
-#include "src/run/filter_spec.h"
+#include "src/filters/filter_options.h"
 
 namespace estlab {
 
@@ -129,4 +129,4 @@ class NoiseAdapter {
 
 }  // namespace estlab
 
-#endif  // ESTLAB_ADAPTIVE_NOISE_ADAPTER_H_
+#endif  // ESTLAB_FILTERS_NOISE_ADAPTER_H_

@@ -1,0 +1,59 @@
+// The options of each filter kind, in one light header (no Eigen templates
+// beyond Core): what FilterSpec maps to (src/run/spec_options.h), what each
+// filter's constructor validates with its IsValid.
+#ifndef ESTLAB_FILTERS_FILTER_OPTIONS_H_
+#define ESTLAB_FILTERS_FILTER_OPTIONS_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "src/filters/sigma_rules.h"
+
+namespace estlab {
+
+struct EkfOptions {
+  // 1 = EKF; > 1 = iterated EKF with this many Gauss-Newton iterations.
+  int iterations = 1;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct KfOptions {
+  // x*; empty = the prior mean given to Initialize().
+  std::vector<double> operating_point;
+  // u*.
+  double operating_input = 0.0;
+
+  bool IsValid(std::string* error) const;
+};
+
+enum class ResampleScheme { kMultinomial, kSystematic, kStratified, kResidual };
+
+// Parses "multinomial", "systematic", "stratified", "residual"; throws InputError.
+ResampleScheme ParseResampleScheme(const std::string& name);
+const char* ResampleSchemeName(ResampleScheme scheme);
+
+struct ParticleOptions {
+  int num_particles = 1000;
+  ResampleScheme resample = ResampleScheme::kSystematic;
+  // Resample when ESS < ess_threshold * N; 1 = every step, 0 = never.
+  double ess_threshold = 0.5;
+  uint64_t seed = 1;
+
+  bool IsValid(std::string* error) const;
+};
+
+// Online noise adaptation of the sigma-point filter (noise_adapter.h).
+struct AdaptSpec {
+  std::string rule;        // "" (off), "sage-husa", "innovation-matching"
+  bool adapt_q = false;
+  bool adapt_r = true;
+  double forgetting = 0.97;  // Sage-Husa b
+  int window = 30;           // innovation matching N
+  double eigen_floor = 1e-10;
+};
+
+}  // namespace estlab
+
+#endif  // ESTLAB_FILTERS_FILTER_OPTIONS_H_

@@ -1,0 +1,86 @@
+// The linearised Kalman filter's equations, written once for any scalar T:
+// LinearizedKf (kalman.h) runs them in double, the tuner's likelihood
+// (adaptive/likelihood.h) with ceres::Jet. The linearisation (x*, u*, h(x*),
+// H) and the discretisation (Phi, Gamma, d) are plain doubles: they do not
+// depend on the noise.
+//
+// Predict (delta = wrap(x - x*), angle states wrapped):
+//   x- = x* + Phi delta + Gamma (u - u*) + d,   P- = Phi P Phi^T + Q
+// Update:
+//   z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
+//   S = H P- H^T + R,  K = P- H^T S^-1
+//   x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
+#ifndef ESTLAB_FILTERS_KALMAN_STEP_H_
+#define ESTLAB_FILTERS_KALMAN_STEP_H_
+
+#include <string>
+
+#include "src/filters/filter.h"
+#include "src/filters/filter_util.h"
+#include "src/filters/gaussian_update.h"
+
+namespace estlab {
+
+// The model linearised about (x*, u*): what the KF steps need.
+template <int N, int M>
+struct KfLinearization {
+  Vec<double, N> x_star = Vec<double, N>::Zero();
+  double u_star = 0.0;
+  Vec<double, M> h_star = Vec<double, M>::Zero();  // h(x*)
+  Mat<M, N> H = Mat<M, N>::Zero();                 // dh/dx at x*
+};
+// Its exact discretisation over one step length.
+template <int N>
+struct KfDiscretization {
+  Mat<N, N> phi = Mat<N, N>::Identity();
+  Vec<double, N> gamma = Vec<double, N>::Zero();
+  Vec<double, N> drift = Vec<double, N>::Zero();
+};
+
+template <class Model, int M, class T = double>
+void KfPredict(const KfLinearization<Model::kStateDim, M>& lin,
+               const KfDiscretization<Model::kStateDim>& step, double u,
+               const MatT<T, Model::kStateDim, Model::kStateDim>& Q, Vec<T, Model::kStateDim>* x,
+               MatT<T, Model::kStateDim, Model::kStateDim>* P) {
+  constexpr int N = Model::kStateDim;
+  // delta = wrap(x - x*);  x- = x* + Phi delta + Gamma (u - u*) + d
+  const Vec<T, N> x_star = lin.x_star.template cast<T>();
+  const Vec<T, N> delta = WrapResidual<N, T>(*x - x_star, Model::kAngleStates);
+  *x = x_star + step.phi.template cast<T>() * delta +
+       step.gamma.template cast<T>() * T(u - lin.u_star) + step.drift.template cast<T>();
+  // P- = Phi P Phi^T + Q
+  MatT<T, N, N> P_pred = step.phi.template cast<T>() * (*P) * step.phi.transpose().template cast<T>() + Q;
+  Symmetrize<N, T>(&P_pred);
+  *P = P_pred;
+}
+
+template <class Model, class Meas, class T = double>
+FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim>& lin,
+                      const Vec<T, Model::kStateDim>& x, const MatT<T, Model::kStateDim, Model::kStateDim>& P,
+                      const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
+                      GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const MatT<T, M, N> H = lin.H.template cast<T>();
+  // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
+  const Vec<T, N> delta = WrapResidual<N, T>(x - lin.x_star.template cast<T>(), Model::kAngleStates);
+  const Vec<T, M> z_pred = lin.h_star.template cast<T>() + H * delta;
+  out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);
+  // S = H P H^T + R,  K = P H^T S^-1
+  if (!KalmanGain<N, M, T>(H, P, R, &out->S, &out->L, &out->K)) {
+    *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
+    return FilterStatus::kFactorizationFailed;
+  }
+  // x+ = x- + K nu;  P+ = (I - K H) P (I - K H)^T + K R K^T
+  out->x = x + out->K * out->nu;
+  out->P = JosephUpdate<N, M, T>(P, out->K, H, R);
+  if (!BeliefFinite<N, T>(out->x, out->P)) {
+    *why = "updated mean or covariance is not finite";
+    return FilterStatus::kNonFinite;
+  }
+  return FilterStatus::kOk;
+}
+
+}  // namespace estlab
+
+#endif  // ESTLAB_FILTERS_KALMAN_STEP_H_
