@@ -73,7 +73,7 @@
 #include "src/ode/fixed_step.h"
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
-#include "src/registry/model_traits.h"
+#include "models/model_traits.h"
 #include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"

@@ -47,6 +47,7 @@ struct ConstantVelocity2d {
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kStateNames = {"px", "vx", "py", "vy"};
+  static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "m", "m/s"};
   static constexpr std::array<bool, 4> kAngleStates = {false, false, false, false};
   static constexpr std::array<std::pair<int, int>, 2> kPositionRatePairs = {{{0, 1}, {2, 3}}};
   struct Params {
@@ -58,6 +59,9 @@ struct ConstantVelocity2d {
   static Vec<T, 4> Rhs(const T&, const Vec<T, 4>& x, double, const Params&) {
     return Vec<T, 4>(x(1), T(0.0), x(3), T(0.0));
   }
+  static constexpr std::array<const char*, 0> kInvariantNames = {};
+  static bool InvariantsHold(const Params&, double) { return false; }
+  static Vec<double, 0> Invariants(const Vec<double, 4>&, const Params&) { return {}; }
   struct Positions {
     static constexpr const char* kName = "positions";
     static constexpr int kDim = 2;

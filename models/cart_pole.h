@@ -28,6 +28,8 @@ struct CartPole {
   static constexpr bool kHasInput = true;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kStateNames = {"x", "v", "theta", "omega"};
+  // Unit of each state ("" = dimensionless), for axis labels and reports.
+  static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "rad", "rad/s"};
   static constexpr std::array<bool, 4> kAngleStates = {false, false, true, false};
   static constexpr std::array<std::pair<int, int>, 2> kPositionRatePairs = {{{0, 1}, {2, 3}}};
 

@@ -36,6 +36,8 @@ struct Dipc {
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 6> kStateNames = {"x",      "v",      "theta1",
                                                              "omega1", "theta2", "omega2"};
+  // Unit of each state ("" = dimensionless), for axis labels and reports.
+  static constexpr std::array<const char*, 6> kStateUnits = {"m", "m/s", "rad", "rad/s", "rad", "rad/s"};
   static constexpr std::array<bool, 6> kAngleStates = {false, false, true, false, true, false};
   static constexpr std::array<std::pair<int, int>, 3> kPositionRatePairs = {
       {{0, 1}, {2, 3}, {4, 5}}};

@@ -31,6 +31,8 @@ struct DoublePendulum {
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kStateNames = {"theta1", "omega1", "theta2",
                                                              "omega2"};
+  // Unit of each state ("" = dimensionless), for axis labels and reports.
+  static constexpr std::array<const char*, 4> kStateUnits = {"rad", "rad/s", "rad", "rad/s"};
   static constexpr std::array<bool, 4> kAngleStates = {true, false, true, false};
   static constexpr std::array<std::pair<int, int>, 2> kPositionRatePairs = {{{0, 1}, {2, 3}}};
 

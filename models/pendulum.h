@@ -25,6 +25,8 @@ struct Pendulum {
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"theta", "omega"};
+  // Unit of each state ("" = dimensionless), for axis labels and reports.
+  static constexpr std::array<const char*, 2> kStateUnits = {"rad", "rad/s"};
   static constexpr std::array<bool, 2> kAngleStates = {true, false};
   static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
 

@@ -25,6 +25,8 @@ struct VanDerPol {
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = true;
   static constexpr std::array<const char*, 2> kStateNames = {"x", "y"};
+  // Unit of each state ("" = dimensionless), for axis labels and reports.
+  static constexpr std::array<const char*, 2> kStateUnits = {"", ""};
   static constexpr std::array<bool, 2> kAngleStates = {false, false};
   static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
 

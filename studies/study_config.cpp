@@ -12,9 +12,9 @@
 #include <set>
 #include <sstream>
 
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 #include "src/core/white_accel.h"
-#include "src/cli/filter_options.h"
+#include "src/options/filter_flags.h"
 #include "src/core/types.h"
 #include "src/io/output_file.h"
 
@@ -312,7 +312,7 @@ auto Checked(const Value& v, const ConfigErrors& err, Fn&& fn) {
 }
 
 long ParseInteger(const std::string& text, const std::string& what, long min_value) {
-  const double v = cli::ParseNumber(text, what);
+  const double v = ParseNumber(text, what);
   if (v != std::floor(v) || std::abs(v) > 1e15)
     throw InputError(what + ": '" + text + "' is not an integer");
   if (v < double(min_value))
@@ -440,14 +440,14 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
 
   if (v.Has("params")) {
     truth.params = Checked(*get("params"), err, [&](const std::string& t) {
-      return model.ResolveParams(cli::ParseAssignments({t}, "params"));
+      return model.ResolveParams(ParseAssignments({t}, "params"));
     });
   } else {
     truth.params = model.ResolveParams({});
   }
   auto parse_state = [&](const std::string& key) {
     return Checked(*get(key), err, [&](const std::string& t) {
-      return model.ResolveState(cli::ParseAssignments({t}, key), key);
+      return model.ResolveState(ParseAssignments({t}, key), key);
     });
   };
   truth.x0 = v.Has("x0") ? parse_state("x0") : std::vector<double>(n, 0.0);
@@ -459,7 +459,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   }
   if (!v.Has("dt")) v.FailSection("'dt' is required");
   truth.dt =
-      Checked(*get("dt"), err, [](const std::string& t) { return cli::ParseNumber(t, "dt"); });
+      Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
   if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
   if (!v.Has("steps")) v.FailSection("'steps' is required");
   sc.steps = Checked(*get("steps"), err,
@@ -483,10 +483,10 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   }
   if (v.Has("truth-rtol"))
     tr.rtol = Checked(*get("truth-rtol"), err,
-                      [](const std::string& t) { return cli::ParseNumber(t, "truth-rtol"); });
+                      [](const std::string& t) { return ParseNumber(t, "truth-rtol"); });
   if (v.Has("truth-atol"))
     tr.atol = Checked(*get("truth-atol"), err,
-                      [](const std::string& t) { return cli::ParseNumber(t, "truth-atol"); });
+                      [](const std::string& t) { return ParseNumber(t, "truth-atol"); });
   if (v.Has("truth-substeps"))
     tr.substeps = Checked(*get("truth-substeps"), err, [](const std::string& t) {
       return int(ParseInteger(t, "truth-substeps", 1));
@@ -516,9 +516,9 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       sc.truth_description += ", no process noise";
     } else if (kind == "diag") {
       const auto d = Checked(val, err, [&](const std::string& t) {
-        auto list = cli::ParseList(t, "process-noise");
-        cli::RequireLength(list, n, "process-noise", "one variance per state");
-        cli::RequireNonNegative(list, "process-noise");
+        auto list = ParseList(t, "process-noise");
+        RequireLength(list, n, "process-noise", "one variance per state");
+        RequireNonNegative(list, "process-noise");
         return list;
       });
       for (int i = 0; i < n; ++i) sc.oracle_q[i * n + i] = d[i];
@@ -526,7 +526,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       sc.truth_description += ", process noise diag " + JoinDoubles(d);
     } else if (kind == "white-accel") {
       sc.oracle_qc = Checked(val, err, [](const std::string& t) {
-        const double qc = cli::ParseNumber(t, "process-noise");
+        const double qc = ParseNumber(t, "process-noise");
         if (qc < 0) throw InputError("process-noise: qc must be >= 0");
         return qc;
       });
@@ -539,7 +539,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       sc.truth_description += ", white-accel qc " + FormatNumber(sc.oracle_qc);
     } else if (kind == "matrix") {
       sc.oracle_q = Checked(val, err, [&](const std::string& t) {
-        auto q = cli::ParseMatrix(t, n, "process-noise");
+        auto q = ParseMatrix(t, n, "process-noise");
         cli::CheckCovariance(q, n, "process-noise", true);
         return q;
       });
@@ -561,9 +561,9 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   truth.meas_noise_var.assign(m, 0.0);
   if (v.Has("meas-noise-var")) {
     truth.meas_noise_var = Checked(*get("meas-noise-var"), err, [&](const std::string& t) {
-      auto list = cli::ParseList(t, "meas-noise-var");
-      cli::RequireLength(list, m, "meas-noise-var", "one per output of '" + meas.name + "'");
-      cli::RequireNonNegative(list, "meas-noise-var");
+      auto list = ParseList(t, "meas-noise-var");
+      RequireLength(list, m, "meas-noise-var", "one per output of '" + meas.name + "'");
+      RequireNonNegative(list, "meas-noise-var");
       return list;
     });
   }
@@ -587,7 +587,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
   if (v.Has("input")) {
     truth.input = Checked(*get("input"), err,
-                          [](const std::string& t) { return cli::ParseNumber(t, "input"); });
+                          [](const std::string& t) { return ParseNumber(t, "input"); });
     if (truth.input != 0 && !model.has_input)
       v.Fail("input", "model '" + model.name + "' has no input");
   }
@@ -598,14 +598,14 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   sc.prior_p0.assign(n * n, 0.0);
   if (v.Has("prior-p0-diag")) {
     const auto d = Checked(*get("prior-p0-diag"), err, [&](const std::string& t) {
-      auto list = cli::ParseList(t, "prior-p0-diag");
-      cli::RequireLength(list, n, "prior-p0-diag", "one per state");
+      auto list = ParseList(t, "prior-p0-diag");
+      RequireLength(list, n, "prior-p0-diag", "one per state");
       return list;
     });
     for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = d[i];
   } else if (v.Has("prior-p0")) {
     sc.prior_p0 = Checked(*get("prior-p0"), err,
-                          [&](const std::string& t) { return cli::ParseMatrix(t, n, "prior-p0"); });
+                          [&](const std::string& t) { return ParseMatrix(t, n, "prior-p0"); });
   } else {
     for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = 1.0;
   }
@@ -1013,7 +1013,7 @@ void ParseReport(const Section& sec, const po::variables_map& vm, StudyConfig* c
         err.Fail(line,
                  "[report] reference: expected mean=, var=, std= or median=, got '" + stat + "'");
       try {
-        r.stats.emplace_back(name, cli::ParseNumber(stat.substr(eq + 1), name));
+        r.stats.emplace_back(name, ParseNumber(stat.substr(eq + 1), name));
       } catch (const InputError& e) {
         err.Fail(line, std::string("[report] reference: ") + e.what());
       }

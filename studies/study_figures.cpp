@@ -12,6 +12,7 @@
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
 #include "src/io/output_file.h"
+#include "src/registry/registry.h"
 #include "studies/study_config.h"
 #include "studies/study_results.h"
 
@@ -50,16 +51,14 @@ std::string ShellQuote(const std::string& s) {
 
 std::string DatValue(const std::string& s) { return s.empty() ? "NaN" : s; }
 
-// "theta [rad]": the unit from the state's name. Every registered model
-// names its states x/v (m, m/s), theta/omega (rad, rad/s) with an optional
-// index; other names (van der Pol's x, y are dimensionless) get none.
+// "theta [rad]": the state's unit as its model header states it
+// (Model::kStateUnits); none for an unknown model or state.
 std::string Unit(const std::string& model, const std::string& state) {
-  auto starts = [&](const char* p) { return state.rfind(p, 0) == 0; };
-  if (model == "van-der-pol") return "";
-  if (starts("theta") || starts("alpha")) return "rad";
-  if (starts("omega")) return "rad/s";
-  if (state == "x") return "m";
-  if (state == "v") return "m/s";
+  for (const ModelEntry* m : AllModels()) {
+    if (m->name != model) continue;
+    const int i = m->StateIndex(state);
+    return i >= 0 ? m->state_units[i] : "";
+  }
   return "";
 }
 std::string Label(const std::string& model, const std::string& what) {

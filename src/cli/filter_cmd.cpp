@@ -4,7 +4,7 @@
 #include <iostream>
 
 #include "src/cli/commands.h"
-#include "src/cli/filter_options.h"
+#include "src/options/filter_flags.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/registry/registry.h"

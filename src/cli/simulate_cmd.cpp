@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "estlab_version.h"
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 #include "src/cli/commands.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"

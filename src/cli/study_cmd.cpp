@@ -7,7 +7,7 @@
 #include <iomanip>
 #include <iostream>
 
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 #include "src/cli/commands.h"
 #include "src/core/types.h"
 #include "src/io/json.h"

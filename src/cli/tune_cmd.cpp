@@ -8,9 +8,9 @@
 #include <optional>
 #include <sstream>
 
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 #include "src/cli/commands.h"
-#include "src/cli/filter_options.h"
+#include "src/options/filter_flags.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/registry/registry.h"

@@ -23,6 +23,7 @@
 #include <string>
 #include <type_traits>
 
+#include "models/model.h"
 #include "src/core/types.h"
 #include "src/ode/transition.h"
 
@@ -65,7 +66,8 @@ struct StepResult {
   Vec<double, M> residual = Vec<double, M>::Zero();
 };
 
-template <class Model, class Meas>
+template <DynamicModel Model, class Meas>
+  requires MeasurementOf<Meas, Model>
 class Filter {
  public:
   static constexpr int kN = Model::kStateDim;

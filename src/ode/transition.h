@@ -19,6 +19,7 @@
 #include <memory>
 #include <string>
 
+#include "models/model.h"
 #include "src/core/types.h"
 
 namespace estlab {
@@ -49,7 +50,7 @@ struct TransitionStats {
   long internal_steps = 0;  // integrator steps taken
 };
 
-template <class Model>
+template <DynamicModel Model>
 class Transition {
  public:
   static constexpr int kN = Model::kStateDim;

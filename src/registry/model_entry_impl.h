@@ -4,15 +4,17 @@
 #define ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 
 #include "adaptive/tuner.h"
+#include "models/model.h"
 #include "src/ode/transition_impl.h"
-#include "src/registry/model_traits.h"
+#include "models/model_traits.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_run_impl.h"
 #include "src/sim/simulator_impl.h"
 
 namespace estlab {
 
-template <class Model>
+template <DynamicModel Model>
+  requires kAllMeasurementsOf<Model>
 ModelEntry MakeModelEntry() {
   ModelEntry e;
   e.name = Model::kName;
@@ -20,6 +22,7 @@ ModelEntry MakeModelEntry() {
   for (int i = 0; i < Model::kStateDim; ++i) {
     e.states.push_back(Model::kStateNames[i]);
     e.angle_states.push_back(Model::kAngleStates[i]);
+    e.state_units.push_back(Model::kStateUnits[i]);
   }
   const typename Model::Params defaults{};
   for (const auto& spec : Model::kParams)

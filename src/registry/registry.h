@@ -21,6 +21,7 @@
 #include "src/core/params.h"
 #include "src/ode/transition.h"
 #include "src/run/filter_spec.h"
+#include "src/sim/simulation.h"
 
 namespace estlab {
 
@@ -37,45 +38,12 @@ struct MeasurementDesc {
   std::vector<bool> angle_outputs;
 };
 
-// What to simulate. Vectors are already resolved to full length by the
-// registry (ResolveParams, ResolveState).
-struct SimulationSpec {
-  std::vector<double> params;  // in the model's parameter order
-  std::vector<double> x0;
-  double t_end = 10.0;
-  double dt = 0.01;
-  TransitionOptions transition;
-  double input = 0.0;
-  std::vector<double> process_noise_var;  // empty = none, else one per state
-  // Full process-noise covariance per output step (n x n, row-major, PSD);
-  // used instead of process_noise_var when not empty.
-  std::vector<double> process_noise_cov;
-  std::string measurement;                // empty = none
-  std::vector<double> meas_noise_var;     // empty = none, else one per output
-  uint64_t seed = 1;
-};
-
-struct SimulationResult {
-  std::vector<std::string> columns;       // t, states, z_<outputs>
-  std::vector<std::vector<double>> rows;  // one per output time computed
-  bool ok = true;
-  std::string error;  // CVODES' reason when !ok
-  long steps = 0;
-  TransitionStats stats;
-  double wall_s = 0.0;
-  // Invariants (energy, momentum) at t0 and their largest relative drift
-  // max_k |I_k - I_0| / |I_0| (absolute when I_0 = 0); empty when the model
-  // has none or they do not hold (damping, input, process noise).
-  std::vector<std::string> invariant_names;
-  std::vector<double> invariant_initial;
-  std::vector<double> invariant_drift;
-};
-
 struct ModelEntry {
   std::string name;
   std::string description;
   std::vector<std::string> states;
   std::vector<bool> angle_states;
+  std::vector<std::string> state_units;  // "" = dimensionless
   std::vector<std::pair<int, int>> position_rate_pairs;  // (position, rate) state indices
   std::vector<ParamDesc> params;
   std::vector<MeasurementDesc> measurements;

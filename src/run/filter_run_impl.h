@@ -25,7 +25,7 @@
 #include "src/filters/noise_adapter.h"
 #include "src/filters/particle.h"
 #include "src/filters/sigma_point.h"
-#include "src/registry/model_traits.h"
+#include "models/model_traits.h"
 #include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"

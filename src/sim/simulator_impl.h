@@ -19,8 +19,8 @@
 
 #include "src/core/random.h"
 #include "src/ode/transition.h"
-#include "src/registry/model_traits.h"
-#include "src/registry/registry.h"
+#include "models/model_traits.h"
+#include "src/sim/simulation.h"
 
 namespace estlab {
 

@@ -52,6 +52,11 @@ struct ConstantVelocity {
     return a;
   }();
   static constexpr std::array<bool, kStateDim> kAngleStates{};
+  static constexpr std::array<const char*, kStateDim> kStateUnits = [] {
+    std::array<const char*, kStateDim> a{};
+    for (int i = 0; i < kStateDim; ++i) a[i] = i % 2 ? "m/s" : "m";
+    return a;
+  }();
   static constexpr std::array<std::pair<int, int>, Axes> kPositionRatePairs = [] {
     std::array<std::pair<int, int>, Axes> a{};
     for (int i = 0; i < Axes; ++i) a[i] = {2 * i, 2 * i + 1};

@@ -41,6 +41,7 @@ struct DampedOscillator {
   static constexpr bool kHasInput = true;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"x", "v"};
+  static constexpr std::array<const char*, 2> kStateUnits = {"m", "m/s"};
   static constexpr std::array<bool, 2> kAngleStates = {false, false};
   static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
 
@@ -107,6 +108,7 @@ struct CoupledOscillators {
   static constexpr bool kHasInput = true;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kStateNames = {"x1", "v1", "x2", "v2"};
+  static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "m", "m/s"};
   static constexpr std::array<bool, 4> kAngleStates = {false, false, false, false};
   static constexpr std::array<std::pair<int, int>, 2> kPositionRatePairs = {{{0, 1}, {2, 3}}};
 

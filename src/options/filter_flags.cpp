@@ -1,4 +1,4 @@
-#include "src/cli/filter_options.h"
+#include "src/options/filter_flags.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 #include "src/io/csv_reader.h"
 
 namespace po = boost::program_options;

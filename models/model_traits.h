@@ -1,13 +1,12 @@
 // Compile-time helpers over a model's measurement list and parameter table.
-#ifndef ESTLAB_REGISTRY_MODEL_TRAITS_H_
-#define ESTLAB_REGISTRY_MODEL_TRAITS_H_
+#ifndef ESTLAB_MODELS_MODEL_TRAITS_H_
+#define ESTLAB_MODELS_MODEL_TRAITS_H_
 
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "src/core/types.h"
-#include "src/registry/registry.h"
 
 namespace estlab {
 
@@ -47,4 +46,4 @@ Vec<double, N> ToVec(const std::vector<double>& v) {
 
 }  // namespace estlab
 
-#endif  // ESTLAB_REGISTRY_MODEL_TRAITS_H_
+#endif  // ESTLAB_MODELS_MODEL_TRAITS_H_

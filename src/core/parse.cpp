@@ -1,4 +1,4 @@
-#include "src/cli/args.h"
+#include "src/core/parse.h"
 
 #include <cerrno>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "src/core/types.h"
 
-namespace estlab::cli {
+namespace estlab {
 
 namespace {
 std::string Trim(const std::string& s) {
@@ -98,4 +98,4 @@ void RequireNonNegative(const std::vector<double>& v, const std::string& option)
   }
 }
 
-}  // namespace estlab::cli
+}  // namespace estlab

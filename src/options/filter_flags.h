@@ -1,7 +1,7 @@
 // The options shared by `estlab filter`, `estlab tune` and the studies:
 // model, measurement, filter and its settings, prior, Q and R, data columns.
-#ifndef ESTLAB_CLI_FILTER_OPTIONS_H_
-#define ESTLAB_CLI_FILTER_OPTIONS_H_
+#ifndef ESTLAB_OPTIONS_FILTER_FLAGS_H_
+#define ESTLAB_OPTIONS_FILTER_FLAGS_H_
 
 #include <boost/program_options.hpp>
 #include <string>
@@ -52,4 +52,4 @@ void CheckCovariance(const std::vector<double>& a, int n, const std::string& wha
 
 }  // namespace estlab::cli
 
-#endif  // ESTLAB_CLI_FILTER_OPTIONS_H_
+#endif  // ESTLAB_OPTIONS_FILTER_FLAGS_H_

@@ -1,13 +1,13 @@
 // Strict parsing of command-line values: every number must parse completely
 // and be finite; errors name the option and the offending text.
-#ifndef ESTLAB_CLI_ARGS_H_
-#define ESTLAB_CLI_ARGS_H_
+#ifndef ESTLAB_CORE_PARSE_H_
+#define ESTLAB_CORE_PARSE_H_
 
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace estlab::cli {
+namespace estlab {
 
 // "1.5" -> 1.5; throws InputError("<option>: ...") on junk, NaN or inf.
 double ParseNumber(const std::string& text, const std::string& option);
@@ -23,6 +23,6 @@ void RequireLength(const std::vector<double>& v, size_t n, const std::string& op
                    const std::string& what);
 void RequireNonNegative(const std::vector<double>& v, const std::string& option);
 
-}  // namespace estlab::cli
+}  // namespace estlab
 
-#endif  // ESTLAB_CLI_ARGS_H_
+#endif  // ESTLAB_CORE_PARSE_H_

@@ -1,0 +1,50 @@
+// What `estlab simulate` (and the studies' truth) asks a model's simulator
+// to do, and what it returns, in plain runtime types.
+#ifndef ESTLAB_SIM_SIMULATION_H_
+#define ESTLAB_SIM_SIMULATION_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "src/ode/transition.h"
+
+namespace estlab {
+
+// What to simulate. Vectors are already resolved to full length by the
+// registry (ResolveParams, ResolveState).
+struct SimulationSpec {
+  std::vector<double> params;  // in the model's parameter order
+  std::vector<double> x0;
+  double t_end = 10.0;
+  double dt = 0.01;
+  TransitionOptions transition;
+  double input = 0.0;
+  std::vector<double> process_noise_var;  // empty = none, else one per state
+  // Full process-noise covariance per output step (n x n, row-major, PSD);
+  // used instead of process_noise_var when not empty.
+  std::vector<double> process_noise_cov;
+  std::string measurement;                // empty = none
+  std::vector<double> meas_noise_var;     // empty = none, else one per output
+  uint64_t seed = 1;
+};
+
+struct SimulationResult {
+  std::vector<std::string> columns;       // t, states, z_<outputs>
+  std::vector<std::vector<double>> rows;  // one per output time computed
+  bool ok = true;
+  std::string error;  // CVODES' reason when !ok
+  long steps = 0;
+  TransitionStats stats;
+  double wall_s = 0.0;
+  // Invariants (energy, momentum) at t0 and their largest relative drift
+  // max_k |I_k - I_0| / |I_0| (absolute when I_0 = 0); empty when the model
+  // has none or they do not hold (damping, input, process noise).
+  std::vector<std::string> invariant_names;
+  std::vector<double> invariant_initial;
+  std::vector<double> invariant_drift;
+};
+
+}  // namespace estlab
+
+#endif  // ESTLAB_SIM_SIMULATION_H_
