@@ -10,12 +10,6 @@
 namespace estlab {
 
 namespace {
-std::string Trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
 std::vector<std::string> Split(const std::string& s, char sep) {
   std::vector<std::string> parts;
   std::string cur;
@@ -25,6 +19,13 @@ std::vector<std::string> Split(const std::string& s, char sep) {
   return parts;
 }
 }  // namespace
+
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
 
 double ParseNumber(const std::string& raw, const std::string& option) {
   const std::string text = Trim(raw);

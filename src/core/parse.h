@@ -9,6 +9,9 @@
 
 namespace estlab {
 
+// s without leading and trailing blanks, tabs and carriage returns.
+std::string Trim(const std::string& s);
+
 // "1.5" -> 1.5; throws InputError("<option>: ...") on junk, NaN or inf.
 double ParseNumber(const std::string& text, const std::string& option);
 // "1,2,3" -> {1,2,3}

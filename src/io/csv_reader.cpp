@@ -7,18 +7,12 @@
 #include <limits>
 #include <sstream>
 
+#include "src/core/parse.h"
 #include "src/core/types.h"
 
 namespace estlab {
 
 namespace {
-
-std::string Trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
 
 std::vector<std::string> SplitLine(const std::string& line) {
   std::vector<std::string> cells;

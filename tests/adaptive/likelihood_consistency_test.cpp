@@ -29,6 +29,15 @@ std::vector<double> Diagonal(int n, double v) {
   return m;
 }
 
+// RK4 with two substeps; CVODES (BDF) for a stiff model (van der Pol: RK4 at
+// dt = 0.01 is unstable), in the simulation and in both filter runs.
+TransitionOptions Transition(const ModelEntry& model) {
+  TransitionOptions o;
+  o.integrator = model.stiff ? Integrator::kCvodes : Integrator::kRk4;
+  o.substeps = 2;
+  return o;
+}
+
 // Measurements of `meas` simulated from the model's defaults, x0 = 0.2 on
 // every state (a small swing), process and measurement noise.
 FilterData Simulated(const ModelEntry& model, const MeasurementDesc& meas) {
@@ -39,15 +48,17 @@ FilterData Simulated(const ModelEntry& model, const MeasurementDesc& meas) {
   sim.x0.assign(n, 0.2);
   sim.t_end = kSteps * kDt;
   sim.dt = kDt;
-  sim.transition.integrator = Integrator::kRk4;
-  sim.transition.substeps = 2;
+  sim.transition = Transition(model);
   sim.process_noise_var.assign(n, 1e-5);
   sim.measurement = meas.name;
   sim.meas_noise_var.assign(m, 1e-3);
   sim.seed = 7;
   const SimulationResult r = model.simulate(sim);
-  EXPECT_TRUE(r.ok) << model.name << ": " << r.error;
   FilterData d;
+  if (!r.ok || r.rows.size() < 10) {
+    ADD_FAILURE() << model.name << ": " << r.error;
+    return d;
+  }
   d.path = model.name + "/" + meas.name;
   d.m = m;
   for (size_t k = 0; k < r.rows.size(); ++k) {
@@ -84,8 +95,7 @@ FilterSpec Spec(const ModelEntry& model, const MeasurementDesc& meas, const Kind
   spec.iterations = kind.iterations;
   spec.sigma_redraw = kind.redraw;
   spec.alpha = 0.5;
-  spec.transition.integrator = Integrator::kRk4;
-  spec.transition.substeps = 2;
+  spec.transition = Transition(model);
   spec.x0.assign(n, 0.15);
   spec.p0 = Diagonal(n, 0.05);
   spec.q = Diagonal(n, 1e-4);
@@ -99,16 +109,23 @@ TEST(LikelihoodConsistency, NllEqualsMinusTheFiltersSummedLogLikelihood) {
   options.r_param = NoiseParam::kFixed;
   options.compute_std_errors = false;
   double worst = 0.0;
-  int cases = 0;
+  int cases = 0, failed = 0;
   for (const ModelEntry* model : AllModels()) {
     for (const MeasurementDesc& meas : model->measurements) {
       const std::vector<FilterData> data = {Simulated(*model, meas)};
+      if (data[0].t.empty()) continue;
       for (const Kind& kind : kKinds) {
         const FilterSpec spec = Spec(*model, meas, kind);
         const FilterRunOutput run = model->run_filter(spec, data[0]);
         const std::string label = model->name + " " + meas.name + " " + kind.label;
-        ASSERT_TRUE(run.summary.ok) << label << ": " << run.summary.message;
         const TuneResult tuned = model->tune(spec, options, data);
+        if (!run.summary.ok) {
+          // The filter fails (the van der Pol KF, linearised once at x0 of a
+          // stiff model, loses positive definiteness): so must the likelihood.
+          EXPECT_TRUE(std::isinf(tuned.nll_initial)) << label << ": " << run.summary.message;
+          ++failed;
+          continue;
+        }
         ASSERT_TRUE(std::isfinite(tuned.nll_initial)) << label;
         const double rel =
             std::abs(tuned.nll_initial + run.summary.loglik) / std::abs(run.summary.loglik);
@@ -119,8 +136,11 @@ TEST(LikelihoodConsistency, NllEqualsMinusTheFiltersSummedLogLikelihood) {
       }
     }
   }
-  std::printf("NLL vs -sum loglik: %d cases, worst relative difference %.3g\n", cases, worst);
-  EXPECT_GE(cases, 5 * 2 * 7);
+  std::printf("NLL vs -sum loglik: %d cases, worst relative difference %.3g; %d cases where "
+              "both the filter and the likelihood fail\n",
+              cases, worst, failed);
+  EXPECT_GE(cases, 50);  // 8 measurements x 7 kinds = 56, less the failing ones
+  EXPECT_LE(failed, 2);
 }
 
 }  // namespace
