@@ -291,8 +291,9 @@ TEST(ParticleFilterTest, CircularMeanOfAngleStates) {
   ParticleOptions options;
   options.num_particles = 4000;
   ParticleFilter<P, P::Angle> pf(transition.get(), params, options);
-  // Particles around theta = pi: the circular mean (atan2) must land on the
-  // branch near pi, not near -pi.
+  // Particles around theta = pi (never wrapped): their plain weighted mean
+  // stays near pi, and a measurement wrapped to -pi + 0.01 gives a wrapped
+  // innovation of 0.01.
   pf.Initialize(Vec<double, 2>(M_PI, 0.0), 0.01 * Mat<2, 2>::Identity());
   EXPECT_NEAR(pf.mean()(0), M_PI, 0.01);
   EXPECT_NEAR(pf.cov()(0, 0), 0.01, 0.002);

@@ -169,8 +169,9 @@ TEST(SigmaPointFilterTest, PointCountsWeightsAndNames) {
 }
 
 TEST(SigmaPointFilterTest, AngleMeansAndInnovationsAreCircular) {
-  // Points straddling theta = pi: a naive mean of +-(pi - 0.01)-like values
-  // would land near 0; the circular mean stays near pi.
+  // A belief at theta = pi and a measurement wrapped to -pi + 0.01: the
+  // innovation is wrapped (0.02, not -2 pi + 0.02), and the points, never
+  // wrapped themselves, keep the mean near pi (their plain weighted mean).
   using P = models::Pendulum;
   const P::Params params;
   auto transition = EulerTransition<P>(params);
