@@ -272,17 +272,7 @@ template <class Model, class Meas>
 const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
                             const std::vector<FilterData>& datasets) {
   std::string error;
-  if (!options.IsValid(&error)) throw InputError(error);
-  if (spec.kind == FilterKind::kPf) {
-    throw InputError(
-        "the tuner supports the kf, ekf, iekf, ukf, ckf and ghkf filters, not pf (its "
-        "likelihood is a random, non-smooth function of Q and R)");
-  }
-  // The filter's own check of its options (the one estlab filter applies).
-  if (!IsValidFilterOptions(spec, &error)) throw InputError(error);
-  if (!spec.adapt.rule.empty())
-    throw InputError("the tuner needs a filter without online adaptation (--adapt)");
-  if (!(spec.transition.substeps >= 1)) throw InputError("substeps must be >= 1");
+  if (!IsTunable(spec, options, Model::kStateDim, &error)) throw InputError(error);
   if (spec.x0.size() != size_t(Model::kStateDim))
     throw InputError("x0 has " + std::to_string(spec.x0.size()) + " entries, expected " +
                      std::to_string(Model::kStateDim));

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "src/core/types.h"
+#include "src/run/filter_options.h"
 
 namespace estlab {
 
@@ -80,6 +81,25 @@ bool TunerOptions::IsValid(std::string* error) const {
     return fail("lower bound " + FormatNumber(log_lower[0]) + " is above upper bound " +
                 FormatNumber(log_upper[0]));
   }
+  return true;
+}
+
+bool IsTunable(const FilterSpec& spec, const TunerOptions& options, int state_dim,
+               std::string* error) {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (!options.IsValid(error)) return false;
+  if (spec.kind == FilterKind::kPf) {
+    return fail(
+        "the tuner supports the kf, ekf, iekf, ukf, ckf and ghkf filters, not pf (its "
+        "likelihood is a random, non-smooth function of Q and R)");
+  }
+  // The filter's own check of its options (the one estlab filter applies).
+  if (!IsValidFilterOptions(spec, state_dim, error)) return false;
+  if (!spec.adapt.rule.empty())
+    return fail("the tuner needs a filter without online adaptation (--adapt)");
   return true;
 }
 

@@ -175,6 +175,14 @@ struct TuneResult {
 // column, bounds, wrong parameterisation). A failing filter is a status.
 // Defined in adaptive/tuner_impl.h, instantiated per model in
 // adaptive/tune_<model>.cpp, reached through ModelEntry::tune.
+// Whether the tuner can fit Q, R of `spec` with `options` for a model with
+// state_dim states: the options are valid, the filter's own options are
+// (filter_options.h of src/run), and the filter is a Gaussian one without
+// online adaptation. Checked before any data is read (studies check their
+// configurations with it); *error says why not.
+bool IsTunable(const FilterSpec& spec, const TunerOptions& options, int state_dim,
+               std::string* error);
+
 template <class Model>
 TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
                      const std::vector<FilterData>& datasets);

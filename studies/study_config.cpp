@@ -13,10 +13,11 @@
 #include <sstream>
 
 #include "src/core/parse.h"
-#include "src/core/white_accel.h"
-#include "src/options/filter_flags.h"
 #include "src/core/types.h"
+#include "src/core/white_accel.h"
 #include "src/io/output_file.h"
+#include "src/options/filter_flags.h"
+#include "src/options/filter_settings.h"
 
 namespace po = boost::program_options;
 
@@ -175,18 +176,13 @@ const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-
                                              "r-param",     "tune-datasets", "tune-starts",
                                              "tune-burn-in"};
 
-// `estlab filter` options that describe the data, the model or the noise
-// (set by the scenario and noise sections, not by [filter.NAME]).
-const std::set<std::string> kNotFilterKeys = {
-    "model", "measure",       "filter", "param", "t0",   "x0",    "p0-diag", "p0",      "q-diag",
-    "q",     "q-white-accel", "r-diag", "r",     "seed", "input", "column",  "full-cov"};
-
+// The keys of a [filter.NAME] section: the filter keys of the one key table
+// (src/options/filter_settings.h) that are not about the data, the model or
+// the noise (those come from the scenario and noise sections).
 std::vector<std::string> FilterKeys() {
-  po::options_description desc;
-  cli::AddFilterOptions(&desc);
   std::vector<std::string> keys = {"kind", "scenarios", "description"};
-  for (const auto& opt : desc.options())
-    if (!kNotFilterKeys.count(opt->long_name())) keys.push_back(opt->long_name());
+  for (const FilterKey& k : FilterKeyTable())
+    if (!k.data) keys.push_back(k.name);
   return keys;
 }
 
@@ -302,21 +298,6 @@ auto Checked(const Value& v, const ConfigErrors& err, Fn&& fn) {
     if (msg.compare(0, prefix.size(), prefix) == 0) msg = msg.substr(prefix.size());
     err.Fail(v.line, v.where + ": " + msg);
   }
-}
-
-long ParseInteger(const std::string& text, const std::string& what, long min_value) {
-  const double v = ParseNumber(text, what);
-  if (v != std::floor(v) || std::abs(v) > 1e15)
-    throw InputError(what + ": '" + text + "' is not an integer");
-  if (v < double(min_value))
-    throw InputError(what + ": must be >= " + std::to_string(min_value) + ", got " + text);
-  return long(v);
-}
-
-bool ParseBool(const std::string& text, const std::string& what) {
-  if (text == "true" || text == "yes" || text == "1") return true;
-  if (text == "false" || text == "no" || text == "0") return false;
-  throw InputError(what + ": expected true or false, got '" + text + "'");
 }
 
 std::vector<std::string> ParseNameList(const std::string& text, const std::string& what) {
@@ -637,23 +618,23 @@ std::vector<std::pair<Section, std::vector<std::pair<std::string, std::string>>>
 }
 
 // ---------------------------------------------------------------------------
-// Filter specs: built with `estlab filter`'s own option parser, so the
-// options mean exactly the same and are checked the same way.
-
-struct ArgSource {
-  std::string option;  // "--alpha"
-  const Value* value;  // where it came from (null: a default we supplied)
-};
+// Filter specs: the scenario's, filter's and noise section's keys fill one
+// FilterSettings and BuildFilterSpec (src/options/filter_settings.h) turns
+// it into a spec, exactly as for `estlab filter`; an error names the key it
+// is about, reported at the line that set it.
 
 Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
                  const SectionValues& filt, int ni, const SectionValues& noise,
                  const ConfigErrors& err) {
-  std::vector<std::string> args;
-  std::vector<ArgSource> sources;
-  auto add = [&](const std::string& option, const std::string& value, const Value* from) {
-    args.push_back("--" + option);
-    args.push_back(value);
-    sources.push_back({"--" + option, from});
+  FilterSettings settings;
+  std::map<std::string, const Value*> origin;  // settings key -> where it was set (null: by us)
+  auto add = [&](const std::string& key, const std::string& value, const Value* from) {
+    const FilterKey* k = FindFilterKey(key, "");
+    if (k != nullptr && k->kind == FilterKey::kRepeatable)
+      settings.Add(key, value);
+    else
+      settings.Set(key, value);
+    origin[key] = from;
   };
   const ModelEntry& model = *sc.model;
   const int n = int(model.states.size());
@@ -732,42 +713,22 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (noise.Has(ik) && !(ik[5] == 'q' ? q_tuned : r_tuned))
       noise.Fail(ik, std::string("an initial guess needs ") + ik[5] + " = tuned");
 
-  po::options_description desc;
-  cli::AddFilterOptions(&desc);
-  auto fail_with = [&](const std::string& message) {
-    // Attribute the message to the first option it names.
-    for (const ArgSource& src : sources) {
-      if (!src.value) continue;
-      const auto pos = message.find(src.option);
-      if (pos == std::string::npos) continue;
-      const std::string key = src.value->where.substr(src.value->where.rfind(' ') + 1);
-      std::string msg = message;
-      msg.replace(pos, src.option.size(), key);
-      if (msg.compare(0, key.size() + 2, key + ": ") == 0)
-        msg = msg.substr(key.size() + 2);
-      else if (msg.compare(0, key.size() + 1, key + " ") == 0)
-        msg = msg.substr(key.size() + 1);
-      err.Fail(src.value->line, src.value->where.substr(0, src.value->where.rfind(' ')) + " " +
-                                    key + ": " + msg + " (for [" + sc.section + "] with [" +
-                                    noise.section().full + "])");
-    }
-    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section + "] and [" +
-                                      noise.section().full + "]: " + message);
-  };
+  const std::string context =
+      " (for [" + sc.section + "] with [" + noise.section().full + "])";
   Combo combo;
   combo.filter = fi;
   combo.noise = ni;
   try {
-    po::variables_map vm;
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-    combo.spec = cli::BuildFilterSpec(vm, model);
-  } catch (const po::error_with_option_name& e) {
-    fail_with(std::string(e.what()) + " [" + e.get_option_name() + "]");
-  } catch (const po::error& e) {
-    fail_with(e.what());
+    combo.spec = BuildFilterSpec(settings, model);
+  } catch (const KeyError& e) {
+    const auto it = origin.find(e.key());
+    if (it != origin.end() && it->second != nullptr)
+      err.Fail(it->second->line, it->second->where + ": " + e.message() + context);
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                      "] and [" + noise.section().full + "]: " + e.what());
   } catch (const InputError& e) {
-    fail_with(e.what());
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                      "] and [" + noise.section().full + "]: " + e.what());
   }
   FilterSpec& spec = combo.spec;
   if (q_oracle) {
@@ -828,6 +789,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     t.compute_std_errors = true;
     std::string error;
     if (!t.IsValid(&error)) noise.FailSection(error);
+    if (!IsTunable(spec, t, n, &error))
+      err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                        "] and [" + noise.section().full + "]: " + error);
   } else {
     for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in"})
       if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
@@ -859,51 +823,6 @@ std::string NoiseDescription(const SectionValues& noise) {
          " tuning trajectories, " +
          (noise.Has("tune-starts") ? noise.Get("tune-starts")->text : "1") + " start(s))";
   return d;
-}
-
-// Tries every combination on a two-step noise-free trajectory, so that
-// options only the filter checks (e.g. a KF operating point) fail before
-// the study starts rather than in every run.
-void DryRun(const ScenarioConfig& sc, const StudyConfig& config,
-            const std::vector<SectionValues>& filter_values, const ConfigErrors& err) {
-  const ModelEntry& model = *sc.model;
-  if (model.run_filter == nullptr)
-    err.Fail(1, "model '" + model.name + "' has no filter runner in this build of estlab");
-  SimulationSpec sim = sc.truth;
-  sim.t_end = 2 * sim.dt;
-  sim.process_noise_var.clear();
-  sim.process_noise_cov.clear();
-  sim.meas_noise_var.clear();
-  const SimulationResult traj = model.simulate(sim);
-  if (!traj.ok || traj.rows.size() < 3) return;  // the truth's own failure is reported per run
-  const int n = int(model.states.size());
-  FilterData data;
-  data.path = "dry run";
-  data.m = int(traj.columns.size()) - 1 - n;
-  for (size_t k = 1; k < traj.rows.size(); ++k) {
-    data.t.push_back(traj.rows[k][0]);
-    data.lines.push_back(long(k));
-    for (int j = 0; j < data.m; ++j) data.z.push_back(traj.rows[k][1 + n + j]);
-  }
-  for (const Combo& c : sc.combos) {
-    try {
-      (void)model.run_filter(c.spec, data);
-      if (c.tune) {
-        if (model.tune == nullptr)
-          throw InputError("model '" + model.name + "' has no likelihood tuner in this build");
-        TunerOptions quick = c.tuner;
-        quick.starts = 1;
-        quick.burn_in = 0;
-        quick.max_iterations = 1;
-        quick.compute_std_errors = false;
-        (void)model.tune(c.spec, quick, {data});
-      }
-    } catch (const InputError& e) {
-      err.Fail(filter_values[c.filter].section().line,
-               "[filter." + config.filters[c.filter].name + "] with [" + sc.section +
-                   "] and [noise." + config.noises[c.noise].name + "]: " + e.what());
-    }
-  }
 }
 
 // ---------------------------------------------------------------------------
@@ -1177,7 +1096,8 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
       }
       if (sc.combos.empty())
         err.Fail(s->line, "[" + s->full + "]: no filter and noise setting applies to it");
-      DryRun(sc, c, filter_values, err);
+      if (sc.model->run_filter == nullptr)
+        err.Fail(s->line, "model '" + sc.model->name + "' has no filter runner in this build");
       c.scenarios.push_back(std::move(sc));
     }
   }

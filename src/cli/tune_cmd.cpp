@@ -91,22 +91,21 @@ bool JsonNumberArray(const std::string& text, const std::string& key, std::vecto
   return true;
 }
 
-// --init-q-scalar s -> --init-q-diag s,s,...  (so BuildFilterSpec sees it).
-void ExpandScalarOption(po::variables_map* vm, const std::string& scalar_opt,
+// --init-q-scalar s -> init-q-diag "s,s,..." in the settings (the user's own
+// text repeated, so BuildFilterSpec reads exactly what was written).
+void ExpandScalarOption(const po::variables_map& vm, const std::string& scalar_opt,
                         const std::string& diag_opt, const std::vector<std::string>& others,
-                        int n) {
-  if (!vm->count(scalar_opt)) return;
+                        int n, FilterSettings* settings) {
+  if (!vm.count(scalar_opt)) return;
   for (const auto& o : others) {
-    if (vm->count(o)) throw InputError("give only one of --" + scalar_opt + " and --" + o);
+    if (settings->Given(o)) throw InputError("give only one of --" + scalar_opt + " and --" + o);
   }
-  const double s = ParseNumber((*vm)[scalar_opt].as<std::string>(), "--" + scalar_opt);
+  const std::string text = vm[scalar_opt].as<std::string>();
+  const double s = ParseNumber(text, "--" + scalar_opt);
   if (!(s > 0)) throw InputError("--" + scalar_opt + " must be > 0");
   std::string diag;
-  for (int i = 0; i < n; ++i) {
-    if (i) diag += ',';
-    diag += FormatDouble(s);
-  }
-  vm->insert({diag_opt, po::variable_value(boost::any(diag), false)});
+  for (int i = 0; i < n; ++i) diag += (i ? "," : "") + text;
+  settings->Set(diag_opt, diag);
 }
 
 NoiseParam DefaultParam(const po::variables_map& vm, const std::string& which) {
@@ -429,10 +428,11 @@ int RunTune(const std::vector<std::string>& args) {
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
   const MeasurementDesc& meas = model.FindMeasurement(vm["measure"].as<std::string>());
   const int n = int(model.states.size()), m = int(meas.outputs.size());
-  ExpandScalarOption(&vm, "init-q-scalar", "init-q-diag",
-                     {"init-q-diag", "init-q", "init-q-white-accel"}, n);
-  ExpandScalarOption(&vm, "init-r-scalar", "init-r-diag", {"init-r-diag", "init-r"}, m);
-  const FilterSpec spec = BuildFilterSpec(vm, model, "init-");
+  FilterSettings settings = SettingsFromVariablesMap(vm, "init-");
+  ExpandScalarOption(vm, "init-q-scalar", "init-q-diag",
+                     {"init-q-diag", "init-q", "init-q-white-accel"}, n, &settings);
+  ExpandScalarOption(vm, "init-r-scalar", "init-r-diag", {"init-r-diag", "init-r"}, m, &settings);
+  const FilterSpec spec = estlab::BuildFilterSpec(settings, model);
 
   TunerOptions options;
   options.q_param = vm.count("q-param")

@@ -99,4 +99,19 @@ void RequireNonNegative(const std::vector<double>& v, const std::string& option)
   }
 }
 
+long ParseInteger(const std::string& text, const std::string& what, long min_value) {
+  const double v = ParseNumber(text, what);
+  if (v != std::floor(v) || std::abs(v) > 1e15)
+    throw InputError(what + ": '" + text + "' is not an integer");
+  if (v < double(min_value))
+    throw InputError(what + ": must be >= " + std::to_string(min_value) + ", got " + text);
+  return long(v);
+}
+
+bool ParseBool(const std::string& text, const std::string& what) {
+  if (text == "true" || text == "yes" || text == "1") return true;
+  if (text == "false" || text == "no" || text == "0") return false;
+  throw InputError(what + ": expected true or false, got '" + text + "'");
+}
+
 }  // namespace estlab

@@ -26,6 +26,12 @@ void RequireLength(const std::vector<double>& v, size_t n, const std::string& op
                    const std::string& what);
 void RequireNonNegative(const std::vector<double>& v, const std::string& option);
 
+// An integer >= min_value written as a number ("100", "1e3"); throws
+// InputError("<what>: ...") otherwise.
+long ParseInteger(const std::string& text, const std::string& what, long min_value);
+// true | yes | 1, false | no | 0; throws InputError("<what>: ...") otherwise.
+bool ParseBool(const std::string& text, const std::string& what);
+
 }  // namespace estlab
 
 #endif  // ESTLAB_CORE_PARSE_H_

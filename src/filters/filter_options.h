@@ -52,6 +52,9 @@ struct AdaptSpec {
   double forgetting = 0.97;  // Sage-Husa b
   int window = 30;           // innovation matching N
   double eigen_floor = 1e-10;
+
+  // Messages start with the option key ("forgetting: must be in (0, 1)").
+  bool IsValid(std::string* error) const;
 };
 
 }  // namespace estlab

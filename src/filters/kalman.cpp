@@ -12,9 +12,10 @@ bool KfOptions::IsValid(std::string* error) const {
   };
   for (size_t i = 0; i < operating_point.size(); ++i) {
     if (!std::isfinite(operating_point[i]))
-      return fail("KF operating point component " + std::to_string(i) + " is not finite");
+      return fail("linearize-at: operating point component " + std::to_string(i) +
+                  " is not finite");
   }
-  if (!std::isfinite(operating_input)) return fail("KF operating input u* is not finite");
+  if (!std::isfinite(operating_input)) return fail("input: the operating input u* is not finite");
   return true;
 }
 

@@ -13,7 +13,7 @@ ResampleScheme ParseResampleScheme(const std::string& name) {
   if (name == "systematic") return ResampleScheme::kSystematic;
   if (name == "stratified") return ResampleScheme::kStratified;
   if (name == "residual") return ResampleScheme::kResidual;
-  throw InputError("unknown resampling scheme '" + name +
+  throw InputError("resample: unknown scheme '" + name +
                    "' (expected multinomial, systematic, stratified or residual)");
 }
 
@@ -37,9 +37,9 @@ bool ParticleOptions::IsValid(std::string* error) const {
     return false;
   };
   if (num_particles < 1)
-    return fail("number of particles must be >= 1, got " + std::to_string(num_particles));
+    return fail("particles: must be >= 1, got " + std::to_string(num_particles));
   if (!(ess_threshold >= 0.0 && ess_threshold <= 1.0))
-    return fail("ESS threshold must be in [0, 1], got " + std::to_string(ess_threshold));
+    return fail("ess-threshold: must be in [0, 1], got " + FormatNumber(ess_threshold));
   return true;
 }
 

@@ -35,13 +35,13 @@ bool SigmaPointOptions::IsValid(std::string* error) const {
     return false;
   };
   if (!(std::isfinite(alpha) && alpha > 0))
-    return fail("sigma-point alpha must be > 0 and finite, got " + std::to_string(alpha));
-  if (!std::isfinite(beta)) return fail("sigma-point beta must be finite");
-  if (!std::isfinite(kappa)) return fail("sigma-point kappa must be finite");
+    return fail("alpha: must be > 0 and finite, got " + FormatNumber(alpha));
+  if (!std::isfinite(beta)) return fail("beta: must be finite");
+  if (!std::isfinite(kappa)) return fail("kappa: must be finite");
   if (gh_order < 1 || gh_order > 20)
-    return fail("Gauss-Hermite order must be in [1, 20], got " + std::to_string(gh_order));
+    return fail("gh-order: must be in [1, 20], got " + std::to_string(gh_order));
   if (!(std::isfinite(jitter) && jitter >= 0))
-    return fail("sigma-point jitter must be >= 0 and finite, got " + std::to_string(jitter));
+    return fail("jitter: must be >= 0 and finite, got " + FormatNumber(jitter));
   return true;
 }
 
@@ -82,23 +82,32 @@ void GaussHermite1D(int order, Eigen::VectorXd* nodes, Eigen::VectorXd* weights)
   *weights /= weights->sum();
 }
 
+bool SigmaPointOptions::IsValidFor(int n, std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (!IsValid(error)) return false;
+  if (n < 1) return fail("sigma points need a state dimension >= 1");
+  if (rule == SigmaRule::kUnscented && !(n + kappa > 0))
+    return fail("kappa: the unscented rule needs n + kappa > 0, got n = " + std::to_string(n) +
+                ", kappa = " + FormatNumber(kappa));
+  if (NumSigmaPoints(n, *this) > kMaxSigmaPoints)
+    return fail("gh-order: Gauss-Hermite order " + std::to_string(gh_order) + " in " +
+                std::to_string(n) + " dimensions needs more than " +
+                std::to_string(kMaxSigmaPoints) + " points");
+  return true;
+}
+
 UnitSigmaPoints MakeUnitSigmaPoints(int n, const SigmaPointOptions& options) {
   std::string error;
-  if (!options.IsValid(&error)) throw InputError(error);
-  if (n < 1) throw InputError("sigma points need a state dimension >= 1");
+  if (!options.IsValidFor(n, &error)) throw InputError(error);
   const long count = NumSigmaPoints(n, options);
-  if (count > kMaxSigmaPoints)
-    throw InputError("Gauss-Hermite order " + std::to_string(options.gh_order) + " in " +
-                     std::to_string(n) + " dimensions needs more than " +
-                     std::to_string(kMaxSigmaPoints) + " points");
   UnitSigmaPoints unit;
   unit.points = Eigen::MatrixXd::Zero(n, count);
   unit.mean_weights.resize(count);
   switch (options.rule) {
     case SigmaRule::kUnscented: {
-      if (!(n + options.kappa > 0))
-        throw InputError("unscented rule needs n + kappa > 0, got n = " + std::to_string(n) +
-                         ", kappa = " + std::to_string(options.kappa));
       const double a2 = options.alpha * options.alpha;
       const double lambda = a2 * (n + options.kappa) - n;  // lambda = alpha^2 (n + kappa) - n
       const double gamma = std::sqrt(n + lambda);          // gamma = sqrt(n + lambda)

@@ -64,7 +64,11 @@ struct SigmaPointOptions {
   // Added times I to P before drawing points, to P- and to S (paper 003: 1e-3).
   double jitter = 0.0;
 
+  // Messages start with the option key ("alpha: must be > 0 ...").
   bool IsValid(std::string* error) const;
+  // IsValid, and usable in n dimensions (n + kappa > 0 for the unscented
+  // rule, at most kMaxSigmaPoints points).
+  bool IsValidFor(int n, std::string* error) const;
 };
 
 // The points of N(0, I_n) (n x L) and their weights (length L).

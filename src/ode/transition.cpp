@@ -32,10 +32,10 @@ bool TransitionOptions::IsValid(std::string* error) const {
     if (error != nullptr) *error = what;
     return false;
   };
-  if (substeps < 1) return fail("--substeps must be >= 1, got " + std::to_string(substeps));
-  if (!(std::isfinite(rtol) && rtol > 0)) return fail("--rtol must be > 0 and finite");
-  if (!(std::isfinite(atol) && atol > 0)) return fail("--atol must be > 0 and finite");
-  if (max_steps < 1) return fail("--max-steps must be >= 1");
+  if (substeps < 1) return fail("substeps: must be >= 1, got " + std::to_string(substeps));
+  if (!(std::isfinite(rtol) && rtol > 0)) return fail("rtol: must be > 0 and finite");
+  if (!(std::isfinite(atol) && atol > 0)) return fail("atol: must be > 0 and finite");
+  if (max_steps < 1) return fail("max-steps: must be >= 1");
   return true;
 }
 

@@ -1,5 +1,6 @@
-// The options shared by `estlab filter`, `estlab tune` and the studies:
-// model, measurement, filter and its settings, prior, Q and R, data columns.
+// The command-line side of the filter options shared by `estlab filter`,
+// `estlab tune` and the studies: program_options generated from the key
+// table (filter_settings.h), --config files, data files.
 #ifndef ESTLAB_OPTIONS_FILTER_FLAGS_H_
 #define ESTLAB_OPTIONS_FILTER_FLAGS_H_
 
@@ -7,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "src/options/filter_settings.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
 
@@ -31,7 +33,12 @@ void AddConfigOption(boost::program_options::options_description* desc);
 void MergeConfigFiles(boost::program_options::variables_map* vm,
                       const std::string& noise_prefix = "");
 
-// Builds and validates the spec (throws InputError naming the option).
+// The filter options given on the command line (defaults left to the key
+// table, filter_settings.h).
+FilterSettings SettingsFromVariablesMap(const boost::program_options::variables_map& vm,
+                                        const std::string& noise_prefix = "");
+
+// Builds and validates the spec (throws KeyError naming the option).
 FilterSpec BuildFilterSpec(const boost::program_options::variables_map& vm, const ModelEntry& model,
                            const std::string& noise_prefix = "");
 

@@ -6,7 +6,7 @@
 //
 // Usage:
 //   std::string error;
-//   if (!IsValidFilterOptions(spec, &error)) throw InputError(error);
+//   if (!IsValidFilterOptions(spec, n, &error)) throw InputError(error);
 //   const EkfOptions o = EkfOptionsOf(spec);
 #ifndef ESTLAB_RUN_FILTER_OPTIONS_H_
 #define ESTLAB_RUN_FILTER_OPTIONS_H_
@@ -24,8 +24,15 @@ EkfOptions EkfOptionsOf(const FilterSpec& spec);
 SigmaPointOptions SigmaPointOptionsOf(const FilterSpec& spec);
 ParticleOptions ParticleOptionsOf(const FilterSpec& spec);  // throws InputError (resample name)
 
-// The IsValid of the options of spec.kind (with *error set when false).
-bool IsValidFilterOptions(const FilterSpec& spec, std::string* error);
+// The IsValid of the options of spec.kind for a model with `state_dim`
+// states, and of the transition options (with *error set when false). Every
+// message starts with the option key it is about ("alpha: must be > 0 ...").
+bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* error);
+// IsValidFilterOptions, and the IsValid of every other kind's options as
+// well: a bad value of an option the chosen filter does not use is still an
+// error (the user may think it applies). What the user-facing front ends
+// check (BuildFilterSpec).
+bool AllFilterOptionsValid(const FilterSpec& spec, int state_dim, std::string* error);
 
 }  // namespace estlab
 

@@ -85,20 +85,55 @@ ParticleOptions ParticleOptionsOf(const FilterSpec& spec) {
   return o;
 }
 
-bool IsValidFilterOptions(const FilterSpec& spec, std::string* error) {
+bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* error) {
+  if (!spec.transition.IsValid(error)) return false;
+  if (!spec.adapt.rule.empty()) {
+    const bool sigma = spec.kind == FilterKind::kUkf || spec.kind == FilterKind::kCkf ||
+                       spec.kind == FilterKind::kGhkf;
+    if (!sigma) {
+      if (error != nullptr) *error = "adapt: needs a sigma-point filter (ukf, ckf, ghkf)";
+      return false;
+    }
+    if (!spec.adapt.IsValid(error)) return false;
+  }
   switch (spec.kind) {
-    case FilterKind::kKf:
+    case FilterKind::kKf: {
+      if (!spec.linearize_at.empty() && int(spec.linearize_at.size()) != state_dim) {
+        if (error != nullptr)
+          *error = "linearize-at: " + std::to_string(spec.linearize_at.size()) +
+                   " values, the model has " + std::to_string(state_dim) + " states";
+        return false;
+      }
       return KfOptionsOf(spec).IsValid(error);
+    }
     case FilterKind::kEkf:
       return EkfOptionsOf(spec).IsValid(error);
     case FilterKind::kUkf:
     case FilterKind::kCkf:
     case FilterKind::kGhkf:
-      return SigmaPointOptionsOf(spec).IsValid(error);
+      return SigmaPointOptionsOf(spec).IsValidFor(state_dim, error);
     case FilterKind::kPf:
-      return ParticleOptionsOf(spec).IsValid(error);
+      try {
+        return ParticleOptionsOf(spec).IsValid(error);
+      } catch (const InputError& e) {  // the resampling scheme's name
+        if (error != nullptr) *error = e.what();
+        return false;
+      }
   }
   return false;
+}
+
+bool AllFilterOptionsValid(const FilterSpec& spec, int state_dim, std::string* error) {
+  if (!IsValidFilterOptions(spec, state_dim, error)) return false;
+  FilterSpec sigma = spec;
+  sigma.kind = FilterKind::kUkf;  // the rule does not matter for IsValid
+  try {
+    return KfOptionsOf(spec).IsValid(error) && EkfOptionsOf(spec).IsValid(error) &&
+           SigmaPointOptionsOf(sigma).IsValid(error) && ParticleOptionsOf(spec).IsValid(error);
+  } catch (const InputError& e) {  // the resampling scheme's name
+    if (error != nullptr) *error = e.what();
+    return false;
+  }
 }
 
 void ChiSquareBounds95(long steps, int dim, double bounds[2]) {

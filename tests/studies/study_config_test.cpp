@@ -113,6 +113,11 @@ TEST(StudyConfig, ErrorsNameFileLineAndKey) {
                   .rfind("s.ini:27: [filter.ukf] alpha: 'abc' is not a number", 0),
               0u)
         << ParseError(Replace(good, "alpha = 0.5", "alpha = abc"));
+    // The filter's own check of its options, reported at the key's line.
+    EXPECT_EQ(ParseError(Replace(good, "alpha = 0.5", "alpha = -1"))
+                  .rfind("s.ini:27: [filter.ukf] alpha: must be > 0 and finite, got -1", 0),
+              0u)
+        << ParseError(Replace(good, "alpha = 0.5", "alpha = -1"));
     EXPECT_EQ(ParseError(Replace(good, "particles = 100", "particles = 0"))
                   .rfind("s.ini:32: [filter.pf] particles: must be >= 1", 0),
               0u)

@@ -1,0 +1,268 @@
+#include "src/options/filter_settings.h"
+
+#include <cstdint>
+#include <exception>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "src/core/parse.h"
+#include "src/options/filter_flags.h"
+#include "src/run/filter_options.h"
+
+namespace estlab {
+
+const std::vector<FilterKey>& FilterKeyTable() {
+  using K = FilterKey;
+  // clang-format off
+  static const std::vector<FilterKey> table = {
+      {"model", nullptr, "model name (see 'estlab list')", K::kValue, false, true},
+      {"measure", nullptr, "measurement name of the model", K::kValue, false, true},
+      {"filter", "ukf", "kf | ekf | iekf | ukf | ckf | ghkf | pf", K::kValue, false, true},
+      {"param", nullptr, "model parameter name=value (repeatable)", K::kRepeatable, false, true},
+      {"t0", nullptr, "time of the prior (default: the first row's time)", K::kValue, false, true},
+      {"integrator", "rk4", "process model: rk4 | euler | semi-implicit-euler | cvodes"},
+      {"substeps", "1", "fixed-step integrators: steps per measurement interval"},
+      {"method", "default", "CVODES method: bdf | adams | default"},
+      {"rtol", "1e-8", "CVODES relative tolerance"},
+      {"atol", "1e-10", "CVODES absolute tolerance"},
+      {"max-steps", "500000", "CVODES maximum steps per interval"},
+      {"x0", nullptr, "prior mean name=value,... (others 0)", K::kRepeatable, false, true},
+      {"p0-diag", nullptr, "prior covariance diagonal (default 1 for every state)", K::kValue, false, true},
+      {"p0", nullptr, "prior covariance matrix \"a,b;c,d\"", K::kValue, false, true},
+      {"q-diag", nullptr, "process noise Q diagonal (per step)", K::kValue, true, true},
+      {"q", nullptr, "process noise Q matrix \"a,b;c,d\" (per step)", K::kValue, true, true},
+      {"q-white-accel", nullptr, "Q = qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] per (position, rate) pair, dt of each step", K::kValue, true, true},
+      {"r-diag", nullptr, "measurement noise R diagonal", K::kValue, true, true},
+      {"r", nullptr, "measurement noise R matrix", K::kValue, true, true},
+      {"linearize-at", nullptr, "kf: operating point name=value,... (default: the prior mean)", K::kRepeatable},
+      {"iterations", "1", "ekf: update iterations (> 1 = iterated EKF; 'iekf' sets 3 by default)"},
+      {"alpha", "1e-3", "ukf: spread alpha"},
+      {"beta", "2", "ukf: prior knowledge beta"},
+      {"kappa", "0", "ukf: secondary scaling kappa"},
+      {"gh-order", "3", "ghkf: Gauss-Hermite order p (p^n points)"},
+      {"sigma-update", "redraw", "propagate (reuse propagated points) | redraw (new points from x-, P-)"},
+      {"jitter", "0", "sigma-point: add jitter*I to P, P- and S (paper 003: 1e-3)"},
+      {"adapt", nullptr, "adaptive sigma-point filter: sage-husa | innovation-matching"},
+      {"adapt-what", "r", "q | r | qr"},
+      {"forgetting", "0.97", "sage-husa forgetting factor b"},
+      {"window", "30", "innovation-matching window N"},
+      {"particles", "1000", "pf: number of particles"},
+      {"resample", "systematic", "pf: multinomial | systematic | stratified | residual"},
+      {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
+      {"seed", "1", "pf: random seed", K::kValue, false, true},
+      {"input", "0", "constant input when the data has no 'u' column", K::kValue, false, true},
+      {"column", nullptr, "map a column: ours=theirs, e.g. z_theta=angle_rad", K::kRepeatable, false, true},
+      {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
+  };
+  // clang-format on
+  return table;
+}
+
+const FilterKey* FindFilterKey(const std::string& key, const std::string& noise_prefix) {
+  for (const FilterKey& k : FilterKeyTable())
+    if ((k.noise ? noise_prefix + k.name : std::string(k.name)) == key) return &k;
+  return nullptr;
+}
+
+std::string FilterSettings::Get(const std::string& key) const {
+  const auto it = values_.find(key);
+  if (it != values_.end() && !it->second.empty()) return it->second.back();
+  const FilterKey* k = FindFilterKey(key, prefix_);
+  if (k == nullptr || k->default_text == nullptr) throw KeyError(key, "is required");
+  return k->default_text;
+}
+
+std::vector<std::string> FilterSettings::GetAll(const std::string& key) const {
+  const auto it = values_.find(key);
+  return it == values_.end() ? std::vector<std::string>{} : it->second;
+}
+
+namespace {
+
+// "--KEY: msg" / "KEY: msg" -> "msg" (the parsers name the option they were given).
+std::string StripKey(const std::string& message, const std::string& key) {
+  for (const std::string& p : {"--" + key + ": ", key + ": ", "--" + key + " "})
+    if (message.compare(0, p.size(), p) == 0) return message.substr(p.size());
+  return message;
+}
+
+// Runs fn(), turning an InputError into a KeyError of `key`.
+template <class Fn>
+auto ForKey(const std::string& key, Fn&& fn) {
+  try {
+    return fn();
+  } catch (const KeyError&) {
+    throw;
+  } catch (const InputError& e) {
+    throw KeyError(key, StripKey(e.what(), key));
+  }
+}
+
+class Reader {
+ public:
+  Reader(const FilterSettings& s) : s_(s) {}
+  bool Given(const std::string& key) const { return s_.Given(key); }
+  std::string Text(const std::string& key) const {
+    return ForKey(key, [&] { return s_.Get(key); });
+  }
+  double Number(const std::string& key) const {
+    return ForKey(key, [&] { return ParseNumber(s_.Get(key), key); });
+  }
+  long Integer(const std::string& key, long min_value) const {
+    return ForKey(key, [&] { return ParseInteger(s_.Get(key), key, min_value); });
+  }
+  std::vector<std::pair<std::string, double>> Assignments(const std::string& key) const {
+    return ForKey(key, [&] { return ParseAssignments(s_.GetAll(key), key); });
+  }
+  // An n x n matrix from KEY-diag (a list) or KEY (a matrix), at most one.
+  std::vector<double> DiagOrMatrix(const std::string& diag_key, const std::string& mat_key, int n,
+                                   const std::string& what) const {
+    if (Given(diag_key) && Given(mat_key))
+      throw KeyError(mat_key, "give only one of --" + diag_key + " and --" + mat_key);
+    std::vector<double> out(n * n, 0.0);
+    if (Given(diag_key)) {
+      ForKey(diag_key, [&] {
+        const auto d = ParseList(s_.Get(diag_key), diag_key);
+        RequireLength(d, n, diag_key, what);
+        for (int i = 0; i < n; ++i) out[i * n + i] = d[i];
+        return 0;
+      });
+    } else if (Given(mat_key)) {
+      out = ForKey(mat_key, [&] { return ParseMatrix(s_.Get(mat_key), n, mat_key); });
+    }
+    return out;
+  }
+
+ private:
+  const FilterSettings& s_;
+};
+
+void ReadTransition(const Reader& r, TransitionOptions* t) {
+  t->integrator = ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
+  t->substeps = int(r.Integer("substeps", 0));
+  const std::string method = r.Text("method");
+  if (method == "bdf")
+    t->method = CvodesMethod::kBdf;
+  else if (method == "adams")
+    t->method = CvodesMethod::kAdams;
+  else if (method != "default")
+    throw KeyError("method", "unknown CVODES method '" + method + "' (bdf, adams, default)");
+  t->rtol = r.Number("rtol");
+  t->atol = r.Number("atol");
+  t->max_steps = r.Integer("max-steps", 0);
+}
+
+// Q (one of q-diag, q, q-white-accel) and R (one of r-diag, r).
+void ReadNoise(const Reader& r, const std::string& np, int n, int m, const std::string& meas,
+               FilterSpec* spec) {
+  const std::string qd = np + "q-diag", qm = np + "q", qw = np + "q-white-accel";
+  const int q_given = int(r.Given(qd)) + int(r.Given(qm)) + int(r.Given(qw));
+  if (q_given != 1)
+    throw KeyError(qd, "give exactly one of --" + qd + ", --" + qm + ", --" + qw +
+                           " (process noise Q)");
+  if (r.Given(qw)) {
+    spec->q_white_accel = true;
+    spec->qc = r.Number(qw);
+    if (spec->qc < 0) throw KeyError(qw, "must be >= 0, got " + FormatNumber(spec->qc));
+  } else {
+    const std::string key = r.Given(qd) ? qd : qm;
+    spec->q = r.DiagOrMatrix(qd, qm, n, "one per state");
+    ForKey(key, [&] { return cli::CheckCovariance(spec->q, n, "Q", true), 0; });
+  }
+  const std::string rd = np + "r-diag", rm = np + "r";
+  if (int(r.Given(rd)) + int(r.Given(rm)) != 1)
+    throw KeyError(rd, "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)");
+  spec->r = r.DiagOrMatrix(rd, rm, m, "one per output of '" + meas + "'");
+  const std::string key = r.Given(rd) ? rd : rm;
+  ForKey(key, [&] { return cli::CheckCovariance(spec->r, m, "R", false), 0; });
+}
+
+// A seed: a non-negative 64-bit integer, all digits.
+uint64_t ParseSeed(const std::string& text) {
+  if (text.empty() || text.size() > 20 || text.find_first_not_of("0123456789") != std::string::npos)
+    throw InputError("expected a non-negative integer, got '" + text + "'");
+  try {
+    return std::stoull(text);
+  } catch (const std::exception&) {
+    throw InputError("'" + text + "' does not fit in 64 bits");
+  }
+}
+
+void ReadFilterKind(const Reader& r, FilterSpec* spec) {
+  const std::string name = r.Text("filter");
+  spec->kind = ForKey("filter", [&] { return ParseFilterKind(name); });
+  spec->iterations = int(r.Integer("iterations", 0));
+  if (name == "iekf" && !r.Given("iterations")) spec->iterations = 3;
+  spec->alpha = r.Number("alpha");
+  spec->beta = r.Number("beta");
+  spec->kappa = r.Number("kappa");
+  spec->gh_order = int(r.Integer("gh-order", 0));
+  const std::string upd = r.Text("sigma-update");
+  if (upd != "propagate" && upd != "redraw")
+    throw KeyError("sigma-update", "expected propagate or redraw, got '" + upd + "'");
+  spec->sigma_redraw = upd == "redraw";
+  spec->jitter = r.Number("jitter");
+  if (r.Given("adapt")) {
+    spec->adapt.rule = r.Text("adapt");
+    const std::string what = r.Text("adapt-what");
+    if (what != "q" && what != "r" && what != "qr")
+      throw KeyError("adapt-what", "expected q, r or qr, got '" + what + "'");
+    spec->adapt.adapt_q = what.find('q') != std::string::npos;
+    spec->adapt.adapt_r = what.find('r') != std::string::npos;
+    spec->adapt.forgetting = r.Number("forgetting");
+    spec->adapt.window = int(r.Integer("window", 0));
+  }
+  spec->particles = int(r.Integer("particles", 0));
+  spec->resample = r.Text("resample");
+  spec->ess_threshold = r.Number("ess-threshold");
+  spec->seed = ForKey("seed", [&] { return ParseSeed(r.Text("seed")); });
+}
+
+}  // namespace
+
+FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& model) {
+  const Reader r(settings);
+  FilterSpec spec;
+  const int n = int(model.states.size());
+  spec.measurement = r.Text("measure");
+  const MeasurementDesc& meas =
+      ForKey("measure", [&]() -> const MeasurementDesc& { return model.FindMeasurement(spec.measurement); });
+  const int m = int(meas.outputs.size());
+  spec.params = ForKey("param", [&] { return model.ResolveParams(r.Assignments("param")); });
+  ReadFilterKind(r, &spec);
+  ReadTransition(r, &spec.transition);
+  if (r.Given("t0")) {
+    spec.has_t0 = true;
+    spec.t0 = r.Number("t0");
+  }
+  spec.x0 = ForKey("x0", [&] { return model.ResolveState(r.Assignments("x0"), "x0"); });
+  if (r.Given("p0-diag") || r.Given("p0")) {
+    spec.p0 = r.DiagOrMatrix("p0-diag", "p0", n, "one per state");
+  } else {
+    spec.p0.assign(n * n, 0.0);
+    for (int i = 0; i < n; ++i) spec.p0[i * n + i] = 1.0;
+  }
+  const std::string p0_key = r.Given("p0") ? "p0" : "p0-diag";
+  ForKey(p0_key, [&] { return cli::CheckCovariance(spec.p0, n, "P0", false), 0; });
+  ReadNoise(r, settings.noise_prefix(), n, m, meas.name, &spec);
+  if (r.Given("linearize-at")) {
+    spec.linearize_at = ForKey("linearize-at", [&] {
+      return model.ResolveState(r.Assignments("linearize-at"), "linearize-at");
+    });
+  }
+  spec.input = r.Number("input");
+  if (spec.input != 0 && !model.has_input)
+    throw KeyError("input", "model '" + model.name + "' has no input");
+  spec.full_cov = r.Given("full-cov");
+  // The filter's own check of its options: messages start with the key.
+  std::string error;
+  if (!AllFilterOptionsValid(spec, n, &error)) {
+    const auto colon = error.find(": ");
+    if (colon == std::string::npos) throw KeyError("filter", error);
+    throw KeyError(error.substr(0, colon), error.substr(colon + 2));
+  }
+  return spec;
+}
+
+}  // namespace estlab
