@@ -11,14 +11,14 @@
 #   5 run, sim   src/run src/sim  one filter run / one simulation
 #   6 adaptive   adaptive         the likelihood and the Q/R tuner
 #   7 registry   src/registry     the model list and per-model entry points
-#   8 options    src/options src/models_inst   flag tables; model instantiation
+#   8 options    src/options      the filter key table, FilterSettings -> FilterSpec
 #   9 studies    studies          Monte Carlo studies, reports, figures
 #  10 cli        src/cli          the estlab command
 #
 # Run by hand: cmake -DESTLAB_SOURCE_DIR=. -P cmake/check_layers.cmake
 set(ESTLAB_LAYERS
   "src/core=0" "src/io=1" "models=2" "src/ode=3" "src/filters=4" "src/run=5" "src/sim=5"
-  "adaptive=6" "src/registry=7" "src/options=8" "src/models_inst=8" "studies=9" "src/cli=10")
+  "adaptive=6" "src/registry=7" "src/options=8" "studies=9" "src/cli=10")
 
 function(estlab_layer_of path out_rank out_folder)
   set(rank -1)

@@ -1,5 +1,5 @@
 // Template definitions behind MakeTransition. Include only from the
-// per-model instantiation units (src/models_inst/*.cpp) and tests.
+// per-model instantiation units (generated from models/model_list.cmake) and tests.
 #ifndef ESTLAB_ODE_TRANSITION_IMPL_H_
 #define ESTLAB_ODE_TRANSITION_IMPL_H_
 

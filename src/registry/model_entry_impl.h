@@ -1,5 +1,6 @@
 // Builds a model's registry entry from its compile-time description. Include
-// only from src/models_inst/<model>.cpp.
+// only from the generated build/generated/models_inst/<model>.cpp
+// (models/model_list.cmake).
 #ifndef ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 #define ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 

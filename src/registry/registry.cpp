@@ -4,16 +4,18 @@
 
 namespace estlab {
 
-const ModelEntry& PendulumEntry();
-const ModelEntry& DoublePendulumEntry();
-const ModelEntry& CartPoleEntry();
-const ModelEntry& DipcEntry();
-const ModelEntry& VanDerPolEntry();
+// The entries of the model list (models/model_list.cmake), each defined in
+// its generated translation unit (ESTLAB_DEFINE_MODEL_ENTRY).
+#define ESTLAB_MODEL(Type, stem) const ModelEntry& Type##Entry();
+#include "estlab_model_list.inc"
+#undef ESTLAB_MODEL
 
 const std::vector<const ModelEntry*>& AllModels() {
   static const std::vector<const ModelEntry*> models = {
-      &PendulumEntry(), &DoublePendulumEntry(), &CartPoleEntry(), &DipcEntry(),
-      &VanDerPolEntry()};
+#define ESTLAB_MODEL(Type, stem) &Type##Entry(),
+#include "estlab_model_list.inc"
+#undef ESTLAB_MODEL
+  };
   return models;
 }
 

@@ -6,8 +6,9 @@
 //   const ModelEntry& m = FindModel("double-pendulum");   // throws InputError
 //   std::vector<double> p = m.ResolveParams({{"L1", 2.0}});
 //
-// Adding a model: one header in models/, one src/models_inst/<name>.cpp that
-// defines its entry with MakeModelEntry<Model>(), one line in registry.cpp.
+// Adding a model: one header in models/ (satisfying DynamicModel,
+// models/model.h) and one line in models/model_list.cmake; CMake generates
+// its entry (MakeModelEntry<Model>()) and its tuner translation units.
 #ifndef ESTLAB_REGISTRY_REGISTRY_H_
 #define ESTLAB_REGISTRY_REGISTRY_H_
 

@@ -1,6 +1,6 @@
 // Runs one filter over a dataset: predict to each measurement time, update
 // when the row has a measurement, record the per-step diagnostics and the
-// summary metrics. Include only from src/models_inst/*.cpp.
+// summary metrics. Include only from the generated per-model units (models/model_list.cmake).
 //
 // Per step k (time t_k):
 //   Q_k = Q, or qc * Q_wa(t_k - t_{k-1})       (white-noise acceleration)

@@ -1,7 +1,0 @@
-// Instantiates every template estlab needs for models::Dipc in this one
-// translation unit (transitions, simulator, filters), so a change to one
-// model rebuilds only this file.
-#include "models/dipc.h"
-#include "src/registry/model_entry_impl.h"
-
-ESTLAB_DEFINE_MODEL_ENTRY(estlab::models::Dipc, DipcEntry)
