@@ -61,6 +61,7 @@
 #include <utility>
 #include <vector>
 
+#include "adaptive/likelihood_setup.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
 #include "src/filters/ekf_step.h"
@@ -210,107 +211,6 @@ T NegLogLikelihood(const InnovationLikelihood<Model, Meas>& likelihood, const T*
 // ---------------------------------------------------------------------------
 // Implementation.
 
-namespace likelihood_internal {
-
-// Median of the positive time steps of a dataset (0 when it has none).
-inline double MedianStep(const FilterData& data) {
-  std::vector<double> steps;
-  for (size_t k = 1; k < data.t.size(); ++k)
-    if (data.t[k] > data.t[k - 1]) steps.push_back(data.t[k] - data.t[k - 1]);
-  if (steps.empty()) return 0.0;
-  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-  return steps[steps.size() / 2];
-}
-
-template <class Model>
-std::vector<std::pair<int, int>> Pairs() {
-  std::vector<std::pair<int, int>> out;
-  for (const auto& p : Model::kPositionRatePairs) out.push_back(p);
-  return out;
-}
-
-template <int D>
-InitialCovariance<D> InitialFromVector(const std::vector<double>& v, const std::string& what) {
-  if (v.size() != size_t(D) * D) {
-    throw InputError("the initial " + what + " has " + std::to_string(v.size()) +
-                     " entries, expected " + std::to_string(D) + " x " + std::to_string(D));
-  }
-  InitialCovariance<D> c;
-  for (int i = 0; i < D; ++i)
-    for (int j = 0; j < D; ++j) c.matrix(i, j) = v[i * D + j];
-  return c;
-}
-
-template <class Model>
-InitialCovariance<Model::kStateDim> InitialQ(const FilterSpec& spec) {
-  if (spec.q_white_accel) {
-    InitialCovariance<Model::kStateDim> c;
-    if (!(spec.qc >= 0 && std::isfinite(spec.qc)))
-      throw InputError("the initial qc must be finite and >= 0, got " + FormatNumber(spec.qc));
-    c.white_accel = true;
-    c.qc = spec.qc;
-    return c;
-  }
-  return InitialFromVector<Model::kStateDim>(spec.q, "Q");
-}
-
-template <class Model>
-std::vector<std::string> StateNames() {
-  std::vector<std::string> out;
-  for (const char* s : Model::kStateNames) out.push_back(s);
-  return out;
-}
-template <class Meas>
-std::vector<std::string> OutputNames() {
-  std::vector<std::string> out;
-  for (const char* s : Meas::kOutputs) out.push_back(s);
-  return out;
-}
-
-// Checks the spec before anything is built from it.
-template <class Model, class Meas>
-const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
-                            const std::vector<FilterData>& datasets) {
-  std::string error;
-  if (!IsTunable(spec, options, Model::kStateDim, &error)) throw InputError(error);
-  if (spec.x0.size() != size_t(Model::kStateDim))
-    throw InputError("x0 has " + std::to_string(spec.x0.size()) + " entries, expected " +
-                     std::to_string(Model::kStateDim));
-  if (spec.p0.size() != size_t(Model::kStateDim) * Model::kStateDim)
-    throw InputError("P0 has the wrong size");
-  if (datasets.empty()) throw InputError("the tuner needs at least one dataset");
-  for (const FilterData& d : datasets) {
-    const std::string name = d.path.empty() ? "a dataset" : d.path;
-    if (d.m != Meas::kDim || d.z.size() != d.t.size() * size_t(Meas::kDim))
-      throw InputError(name + ": measurement columns do not match '" + std::string(Meas::kName) +
-                       "'");
-    if (d.has_input && d.u.size() != d.t.size()) throw InputError(name + ": input column size");
-    long updates = 0;
-    std::vector<long> finite(Meas::kDim, 0);
-    for (size_t k = 0; k < d.t.size(); ++k) {
-      bool all = true;
-      for (int j = 0; j < Meas::kDim; ++j) {
-        const bool f = std::isfinite(d.z[k * Meas::kDim + j]);
-        finite[j] += f;
-        all = all && f;
-      }
-      updates += all;
-    }
-    for (int j = 0; j < Meas::kDim; ++j) {
-      if (finite[j] == 0)
-        throw InputError(name + ": measurement column z_" + std::string(Meas::kOutputs[j]) +
-                         " has no value (all missing)");
-    }
-    if (updates <= options.burn_in) {
-      throw InputError(name + ": " + std::to_string(updates) +
-                       " measurement updates, not more than the burn-in of " +
-                       std::to_string(options.burn_in));
-    }
-  }
-  return spec;
-}
-
-}  // namespace likelihood_internal
 
 template <class Model, class Meas>
 InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,

@@ -1,0 +1,222 @@
+// The filter x noise combinations of a scenario: each one's FilterSpec from
+// the scenario's, filter's and noise section's keys (study_config_parts.h).
+#include <cmath>
+#include <map>
+
+#include "adaptive/tuner.h"
+#include "src/core/parse.h"
+#include "src/io/output_file.h"
+#include "src/options/filter_settings.h"
+#include "studies/study_config_parts.h"
+
+namespace estlab::study_config {
+
+// ---------------------------------------------------------------------------
+// Filter specs: the scenario's, filter's and noise section's keys fill one
+// FilterSettings and BuildFilterSpec (src/options/filter_settings.h) turns
+// it into a spec, exactly as for `estlab filter`; an error names the key it
+// is about, reported at the line that set it.
+
+Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
+                 const SectionValues& filt, int ni, const SectionValues& noise,
+                 const ConfigErrors& err) {
+  FilterSettings settings;
+  std::map<std::string, const Value*> origin;  // settings key -> where it was set (null: by us)
+  auto add = [&](const std::string& key, const std::string& value, const Value* from) {
+    const FilterKey* k = FindFilterKey(key, "");
+    if (k != nullptr && k->kind == FilterKey::kRepeatable)
+      settings.Add(key, value);
+    else
+      settings.Set(key, value);
+    origin[key] = from;
+  };
+  const ModelEntry& model = *sc.model;
+  const int n = int(model.states.size());
+  const int m = int(model.FindMeasurement(sc.truth.measurement).outputs.size());
+  add("measure", sc.truth.measurement, scen.Get("measurement"));
+  if (scen.Has("params")) add("param", scen.Get("params")->text, scen.Get("params"));
+  // Prior from the scenario (already validated): pass as numbers.
+  std::string x0;
+  for (int i = 0; i < n; ++i) {
+    if (i) x0 += ',';
+    x0 += model.states[i] + "=" + FormatDouble(sc.prior_x0[i]);
+  }
+  add("x0", x0, scen.Get(scen.Has("prior-x0") ? "prior-x0" : "x0"));
+  std::string p0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (j) p0 += ',';
+      p0 += FormatDouble(sc.prior_p0[i * n + j]);
+    }
+    if (i + 1 < n) p0 += ";";
+  }
+  add("p0", p0, nullptr);
+  add("input", FormatDouble(sc.truth.input), scen.Get("input"));
+  const Value* kind = filt.Get("kind");
+  add("filter", kind->text, kind);
+  for (const Entry& e : filt.section().entries) {
+    if (e.key == "kind" || e.key == "scenarios" || e.key == "description") continue;
+    add(e.key, filt.Get(e.key)->text, filt.Get(e.key));
+  }
+  // Q and R: the noise section's keys, or placeholders replaced below.
+  // `tuned` starts from the init-q-* / init-r-* key, else from the oracle.
+  bool q_oracle = false, r_oracle = false, q_tuned = false, r_tuned = false;
+  bool r_oracle_std = false;
+  std::string q_shape, r_shape;  // the key that gave the (initial) matrix
+  for (const char* key : {"q", "q-diag", "q-white-accel", "r", "r-diag"}) {
+    const Value* val = noise.Get(key);
+    if (!val) continue;
+    const std::string k = key;
+    const std::string which = k.substr(0, 1);
+    if (val->text == "oracle-std") {
+      // Paper 003's sweep: R = diag(std) instead of diag(std^2).
+      if (k != "r") noise.Fail(k, "'oracle-std' goes in key r");
+      r_oracle = r_oracle_std = true;
+      r_shape = "r-diag";
+      add("r-diag", JoinDoubles(std::vector<double>(m, 1.0)), val);
+      continue;
+    }
+    if (val->text == "oracle" || val->text == "tuned") {
+      if (k != which) noise.Fail(k, "'" + val->text + "' goes in key " + which);
+      const bool tuned = val->text == "tuned";
+      (which == "q" ? q_tuned : r_tuned) = tuned;
+      const Value* init = nullptr;
+      for (const std::string& ik :
+           which == "q" ? std::vector<std::string>{"init-q-diag", "init-q", "init-q-white-accel"}
+                        : std::vector<std::string>{"init-r-diag", "init-r"}) {
+        if (!noise.Has(ik)) continue;
+        if (!tuned) noise.Fail(ik, "an initial guess needs " + which + " = tuned");
+        if (init) noise.Fail(ik, "give only one initial " + which + " (init-" + which + "*)");
+        init = noise.Get(ik);
+        (which == "q" ? q_shape : r_shape) = ik.substr(5);
+        add(ik.substr(5), init->text, init);
+      }
+      if (!init) {
+        (which == "q" ? q_oracle : r_oracle) = true;
+        add(which + "-diag",
+            which == "q" ? JoinDoubles(std::vector<double>(n, 0.0))
+                         : JoinDoubles(std::vector<double>(m, 1.0)),
+            val);
+      }
+      continue;
+    }
+    (which == "q" ? q_shape : r_shape) = k;
+    add(k, val->text, val);
+  }
+  for (const char* ik : {"init-q-diag", "init-q", "init-q-white-accel", "init-r-diag", "init-r"})
+    if (noise.Has(ik) && !(ik[5] == 'q' ? q_tuned : r_tuned))
+      noise.Fail(ik, std::string("an initial guess needs ") + ik[5] + " = tuned");
+
+  const std::string context =
+      " (for [" + sc.section + "] with [" + noise.section().full + "])";
+  Combo combo;
+  combo.filter = fi;
+  combo.noise = ni;
+  try {
+    combo.spec = BuildFilterSpec(settings, model);
+  } catch (const KeyError& e) {
+    const auto it = origin.find(e.key());
+    if (it != origin.end() && it->second != nullptr)
+      err.Fail(it->second->line, it->second->where + ": " + e.message() + context);
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                      "] and [" + noise.section().full + "]: " + e.what());
+  } catch (const InputError& e) {
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                      "] and [" + noise.section().full + "]: " + e.what());
+  }
+  FilterSpec& spec = combo.spec;
+  if (q_oracle) {
+    spec.q_white_accel = sc.oracle_q_white_accel;
+    spec.qc = sc.oracle_qc;
+    spec.q = sc.oracle_q;
+  }
+  if (r_oracle) {
+    for (int j = 0; j < m; ++j) {
+      if (!(sc.oracle_r[j * m + j] > 0)) {
+        noise.Fail("r", "the oracle R of [" + sc.section +
+                            "] is singular: its meas-noise-var is 0 for output '" +
+                            model.FindMeasurement(sc.truth.measurement).outputs[j] + "'");
+      }
+    }
+    spec.r = sc.oracle_r;
+    if (r_oracle_std)
+      for (double& x : spec.r) x = std::sqrt(x);
+  }
+  spec.has_t0 = !sc.measure_at_t0;
+  spec.t0 = 0.0;
+  if (q_tuned || r_tuned) {
+    combo.tune = true;
+    TunerOptions& t = combo.tuner;
+    auto param = [&](bool tuned, const std::string& which, const std::string& shape) {
+      if (!tuned) {
+        if (noise.Has(which + "-param"))
+          noise.Fail(which + "-param", "needs " + which + " = tuned");
+        return NoiseParam::kFixed;
+      }
+      if (noise.Has(which + "-param")) {
+        return Checked(*noise.Get(which + "-param"), err, [&](const std::string& t) {
+          const NoiseParam p = ParseNoiseParam(t, which + "-param");
+          if (p == NoiseParam::kFixed) throw InputError(which + "-param: fixed contradicts tuned");
+          return p;
+        });
+      }
+      if (shape == which + "-white-accel") return NoiseParam::kWhiteAccel;
+      if (shape == which) return NoiseParam::kFull;
+      if (shape.empty() && which == "q" && sc.oracle_q_white_accel) return NoiseParam::kWhiteAccel;
+      if (shape.empty() && which == "q") {
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j)
+            if (i != j && sc.oracle_q[i * n + j] != 0.0) return NoiseParam::kFull;
+      }
+      return NoiseParam::kDiag;
+    };
+    t.q_param = param(q_tuned, "q", q_shape);
+    t.r_param = param(r_tuned, "r", r_shape);
+    auto integer = [&](const std::string& key, long fallback, long min_value) {
+      if (!noise.Has(key)) return fallback;
+      return Checked(*noise.Get(key), err,
+                     [&](const std::string& t) { return ParseInteger(t, key, min_value); });
+    };
+    combo.tune_datasets = int(integer("tune-datasets", 3, 1));
+    t.starts = int(integer("tune-starts", 1, 1));
+    t.burn_in = int(integer("tune-burn-in", 0, 0));
+    t.compute_std_errors = true;
+    std::string error;
+    if (!t.IsValid(&error)) noise.FailSection(error);
+    if (!IsTunable(spec, t, n, &error))
+      err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
+                                        "] and [" + noise.section().full + "]: " + error);
+  } else {
+    for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in"})
+      if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
+  }
+  return combo;
+}
+
+std::string NoiseDescription(const SectionValues& noise) {
+  auto describe = [&](const std::string& which, std::vector<std::string> keys) {
+    for (const auto& key : keys) {
+      if (!noise.Has(key)) continue;
+      const std::string& v = noise.Get(key)->text;
+      if (v == "oracle") return std::string("oracle");
+      if (v == "oracle-std") return std::string("diag(sqrt(oracle variance)) (paper 003's R)");
+      if (v != "tuned") return key + " " + v;
+      std::string out = "tuned";
+      if (noise.Has(which + "-param")) out += " (" + noise.Get(which + "-param")->text + ")";
+      for (const auto& ik :
+           {"init-" + which + "-diag", "init-" + which, "init-" + which + "-white-accel"})
+        if (noise.Has(ik)) return out + " from " + ik.substr(5) + " " + noise.Get(ik)->text;
+      return out + " from the oracle";
+    }
+    return std::string("?");
+  };
+  std::string d = "Q " + describe("q", {"q", "q-diag", "q-white-accel"}) + ", R " +
+                  describe("r", {"r", "r-diag"});
+  if (noise.Has("tune-datasets") || noise.Has("tune-starts"))
+    d += " (" + (noise.Has("tune-datasets") ? noise.Get("tune-datasets")->text : "3") +
+         " tuning trajectories, " +
+         (noise.Has("tune-starts") ? noise.Get("tune-starts")->text : "1") + " start(s))";
+  return d;
+}
+
+}  // namespace estlab::study_config

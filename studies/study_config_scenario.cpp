@@ -1,0 +1,245 @@
+// The [scenario.NAME] sections: the truth (model, simulation, noise), the
+// prior, and the '|' alternatives (study_config_parts.h).
+#include <Eigen/Core>
+#include <cmath>
+#include <set>
+
+#include "src/core/parse.h"
+#include "src/core/white_accel.h"
+#include "src/options/filter_flags.h"
+#include "studies/study_config_parts.h"
+
+namespace estlab {
+
+std::vector<double> WhiteAccelCovariance(const ModelEntry& model, double qc, double dt) {
+  const int n = int(model.states.size());
+  Eigen::MatrixXd Q(n, n);
+  FillWhiteAccel(model.position_rate_pairs, qc, dt, &Q);
+  std::vector<double> q(n * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) q[i * n + j] = Q(i, j);
+  return q;
+}
+
+namespace study_config {
+
+ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
+  ScenarioConfig sc;
+  sc.section = v.section().full;
+  auto get = [&](const std::string& key) { return v.Get(key); };
+  auto text_or = [&](const std::string& key, const std::string& fallback) {
+    return v.Has(key) ? v.Get(key)->text : fallback;
+  };
+  if (!v.Has("model")) v.FailSection("'model' is required (see 'estlab list')");
+  sc.model = Checked(*get("model"), err, [](const std::string& t) { return &FindModel(t); });
+  const ModelEntry& model = *sc.model;
+  const int n = int(model.states.size());
+  SimulationSpec& truth = sc.truth;
+
+  if (v.Has("params")) {
+    truth.params = Checked(*get("params"), err, [&](const std::string& t) {
+      return model.ResolveParams(ParseAssignments({t}, "params"));
+    });
+  } else {
+    truth.params = model.ResolveParams({});
+  }
+  auto parse_state = [&](const std::string& key) {
+    return Checked(*get(key), err, [&](const std::string& t) {
+      return model.ResolveState(ParseAssignments({t}, key), key);
+    });
+  };
+  truth.x0 = v.Has("x0") ? parse_state("x0") : std::vector<double>(n, 0.0);
+  if (v.Has("truth-x0")) {
+    const std::string mode = get("truth-x0")->text;
+    if (mode != "fixed" && mode != "sample")
+      v.Fail("truth-x0", "expected fixed or sample, got '" + mode + "'");
+    sc.sample_x0 = mode == "sample";
+  }
+  if (!v.Has("dt")) v.FailSection("'dt' is required");
+  truth.dt =
+      Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
+  if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
+  if (!v.Has("steps")) v.FailSection("'steps' is required");
+  sc.steps = Checked(*get("steps"), err,
+                     [](const std::string& t) { return int(ParseInteger(t, "steps", 1)); });
+  truth.t_end = sc.steps * truth.dt;
+
+  TransitionOptions& tr = truth.transition;
+  tr.integrator =
+      Checked(Value{text_or("truth-integrator", "cvodes"),
+                    v.Has("truth-integrator") ? get("truth-integrator")->line : v.section().line,
+                    "[" + sc.section + "] truth-integrator"},
+              err, [](const std::string& t) { return ParseIntegrator(t); });
+  if (v.Has("truth-method")) {
+    const std::string m = get("truth-method")->text;
+    if (m == "bdf")
+      tr.method = CvodesMethod::kBdf;
+    else if (m == "adams")
+      tr.method = CvodesMethod::kAdams;
+    else if (m != "default")
+      v.Fail("truth-method", "expected bdf, adams or default, got '" + m + "'");
+  }
+  if (v.Has("truth-rtol"))
+    tr.rtol = Checked(*get("truth-rtol"), err,
+                      [](const std::string& t) { return ParseNumber(t, "truth-rtol"); });
+  if (v.Has("truth-atol"))
+    tr.atol = Checked(*get("truth-atol"), err,
+                      [](const std::string& t) { return ParseNumber(t, "truth-atol"); });
+  if (v.Has("truth-substeps"))
+    tr.substeps = Checked(*get("truth-substeps"), err, [](const std::string& t) {
+      return int(ParseInteger(t, "truth-substeps", 1));
+    });
+  if (v.Has("truth-max-steps"))
+    tr.max_steps = Checked(*get("truth-max-steps"), err, [](const std::string& t) {
+      return ParseInteger(t, "truth-max-steps", 1);
+    });
+  std::string error;
+  if (!tr.IsValid(&error)) v.FailSection(error);
+  sc.truth_description = IntegratorName(tr.integrator);
+  if (tr.integrator == Integrator::kCvodes)
+    sc.truth_description += " rtol " + FormatNumber(tr.rtol) + " atol " + FormatNumber(tr.atol);
+  else if (tr.substeps > 1)
+    sc.truth_description += " x" + std::to_string(tr.substeps) + " substeps";
+
+  // Process noise of the truth, per step of dt.
+  sc.oracle_q.assign(n * n, 0.0);
+  const std::string pn = text_or("process-noise", "none");
+  {
+    const auto space = pn.find_first_of(" \t");
+    const std::string kind = pn.substr(0, space);
+    const std::string arg = space == std::string::npos ? "" : Trim(pn.substr(space));
+    const Value val{arg, v.Has("process-noise") ? get("process-noise")->line : 0,
+                    "[" + sc.section + "] process-noise"};
+    if (kind == "none") {
+      sc.truth_description += ", no process noise";
+    } else if (kind == "diag") {
+      const auto d = Checked(val, err, [&](const std::string& t) {
+        auto list = ParseList(t, "process-noise");
+        RequireLength(list, n, "process-noise", "one variance per state");
+        RequireNonNegative(list, "process-noise");
+        return list;
+      });
+      for (int i = 0; i < n; ++i) sc.oracle_q[i * n + i] = d[i];
+      truth.process_noise_var = d;
+      sc.truth_description += ", process noise diag " + JoinDoubles(d);
+    } else if (kind == "white-accel") {
+      sc.oracle_qc = Checked(val, err, [](const std::string& t) {
+        const double qc = ParseNumber(t, "process-noise");
+        if (qc < 0) throw InputError("process-noise: qc must be >= 0");
+        return qc;
+      });
+      if (model.position_rate_pairs.empty())
+        v.Fail("process-noise", "white-accel needs (position, rate) state pairs; model '" +
+                                    model.name + "' has none");
+      sc.oracle_q_white_accel = true;
+      sc.oracle_q = WhiteAccelCovariance(model, sc.oracle_qc, truth.dt);
+      truth.process_noise_cov = sc.oracle_q;
+      sc.truth_description += ", white-accel qc " + FormatNumber(sc.oracle_qc);
+    } else if (kind == "matrix") {
+      sc.oracle_q = Checked(val, err, [&](const std::string& t) {
+        auto q = ParseMatrix(t, n, "process-noise");
+        cli::CheckCovariance(q, n, "process-noise", true);
+        return q;
+      });
+      truth.process_noise_cov = sc.oracle_q;
+      sc.truth_description += ", process noise matrix";
+    } else {
+      v.Fail("process-noise",
+             "expected none, diag V1,V2,..., white-accel QC or matrix A,B;C,D, "
+             "got '" +
+                 pn + "'");
+    }
+  }
+
+  if (!v.Has("measurement")) v.FailSection("'measurement' is required (see 'estlab list')");
+  truth.measurement = get("measurement")->text;
+  const MeasurementDesc& meas = *Checked(
+      *get("measurement"), err, [&](const std::string& t) { return &model.FindMeasurement(t); });
+  const int m = int(meas.outputs.size());
+  truth.meas_noise_var.assign(m, 0.0);
+  if (v.Has("meas-noise-var")) {
+    truth.meas_noise_var = Checked(*get("meas-noise-var"), err, [&](const std::string& t) {
+      auto list = ParseList(t, "meas-noise-var");
+      RequireLength(list, m, "meas-noise-var", "one per output of '" + meas.name + "'");
+      RequireNonNegative(list, "meas-noise-var");
+      return list;
+    });
+  }
+  sc.oracle_r.assign(m * m, 0.0);
+  for (int j = 0; j < m; ++j) sc.oracle_r[j * m + j] = truth.meas_noise_var[j];
+  if (v.Has("meas-noise")) {
+    const std::string kind = get("meas-noise")->text;
+    if (kind == "poisson") {
+      // The counts' variance is lambda, so the oracle R stays diag(lambda);
+      // their mean lambda is a bias no filter here models (as in paper 004).
+      sc.poisson_meas = true;
+      sc.poisson_lambda = truth.meas_noise_var;
+      truth.meas_noise_var.assign(m, 0.0);
+      sc.truth_description += ", Poisson measurement counts";
+    } else if (kind != "gaussian") {
+      v.Fail("meas-noise", "expected gaussian or poisson, got '" + kind + "'");
+    }
+  }
+  if (v.Has("measure-at-t0"))
+    sc.measure_at_t0 = Checked(*get("measure-at-t0"), err,
+                               [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
+  if (v.Has("input")) {
+    truth.input = Checked(*get("input"), err,
+                          [](const std::string& t) { return ParseNumber(t, "input"); });
+    if (truth.input != 0 && !model.has_input)
+      v.Fail("input", "model '" + model.name + "' has no input");
+  }
+
+  sc.prior_x0 = v.Has("prior-x0") ? parse_state("prior-x0") : truth.x0;
+  if (v.Has("prior-p0-diag") && v.Has("prior-p0"))
+    v.Fail("prior-p0", "give only one of prior-p0-diag and prior-p0");
+  sc.prior_p0.assign(n * n, 0.0);
+  if (v.Has("prior-p0-diag")) {
+    const auto d = Checked(*get("prior-p0-diag"), err, [&](const std::string& t) {
+      auto list = ParseList(t, "prior-p0-diag");
+      RequireLength(list, n, "prior-p0-diag", "one per state");
+      return list;
+    });
+    for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = d[i];
+  } else if (v.Has("prior-p0")) {
+    sc.prior_p0 = Checked(*get("prior-p0"), err,
+                          [&](const std::string& t) { return ParseMatrix(t, n, "prior-p0"); });
+  } else {
+    for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = 1.0;
+  }
+  const std::string p0_key = v.Has("prior-p0") ? "prior-p0" : "prior-p0-diag";
+  try {
+    cli::CheckCovariance(sc.prior_p0, n, "P0", false);
+  } catch (const InputError& e) {
+    v.Fail(p0_key, e.what());
+  }
+  return sc;
+}
+
+// Expands the '|' alternatives of a scenario section into one Section per
+// combination (product in key order; the last key varies fastest).
+std::vector<std::pair<Section, std::vector<std::pair<std::string, std::string>>>> ExpandScenario(
+    const Section& sec, const ConfigErrors& err) {
+  std::vector<std::pair<Section, std::vector<std::pair<std::string, std::string>>>> out;
+  out.push_back({sec, {}});
+  out[0].first.entries.clear();
+  for (const Entry& e : sec.entries) {
+    const auto alts = ParseAlternatives(e, err, "[" + sec.full + "] " + e.key);
+    std::vector<std::pair<Section, std::vector<std::pair<std::string, std::string>>>> next;
+    for (const auto& [s, choices] : out) {
+      for (const auto& a : alts) {
+        auto s2 = s;
+        s2.entries.push_back({e.key, a.value, e.line});
+        auto c2 = choices;
+        if (alts.size() > 1) c2.emplace_back(e.key, a.label);
+        next.emplace_back(std::move(s2), std::move(c2));
+      }
+    }
+    out = std::move(next);
+    if (out.size() > 10000) err.Fail(e.line, "[" + sec.full + "]: more than 10000 combinations");
+  }
+  return out;
+}
+
+}  // namespace study_config
+}  // namespace estlab
