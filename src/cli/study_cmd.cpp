@@ -11,6 +11,7 @@
 #include "src/cli/commands.h"
 #include "src/core/types.h"
 #include "src/io/json.h"
+#include "src/io/output_file.h"
 #include "studies/study_config.h"
 #include "studies/study_figures.h"
 #include "studies/study_results.h"
@@ -99,10 +100,12 @@ void PrintSummaryTable(const std::string& dir) {
       group = g;
     }
     const std::string& m = r[metric];
+    // The numbers of summary.csv, formatted (6 significant digits), never cut.
+    const auto number = CellForDisplay;
     if (m.rfind("rmse_", 0) == 0 || m == "mean_nees" || m == "mean_nis")
       std::cout << "  " << std::left << std::setw(16) << m << std::right << std::setw(12)
-                << (r[mean].empty() ? "-" : r[mean].substr(0, 10)) << "   95% CI ["
-                << r[lo].substr(0, 9) << ", " << r[hi].substr(0, 9) << "]\n";
+                << number(r[mean]) << "   95% CI [" << number(r[lo]) << ", " << number(r[hi])
+                << "]\n";
   }
 }
 

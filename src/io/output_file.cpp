@@ -1,5 +1,7 @@
 #include "src/io/output_file.h"
 
+#include <cstdlib>
+
 #include <unistd.h>
 
 #include <cmath>
@@ -40,6 +42,13 @@ void OutputFile::Commit() {
     throw InputError("cannot move output into place at '" + path_ + "'");
   }
   committed_ = true;
+}
+
+std::string CellForDisplay(const std::string& cell) {
+  if (cell.empty()) return "-";
+  char* end = nullptr;
+  const double v = std::strtod(cell.c_str(), &end);
+  return *end == '\0' ? FormatNumber(v) : cell;
 }
 
 std::string FormatDouble(double v) {

@@ -37,6 +37,12 @@ class OutputFile {
 // "%.17g", the shortest text that reads back to the same double.
 std::string FormatDouble(double v);
 
+// A CSV cell for a console table: its number with 6 significant digits
+// (FormatNumber: "2.176861944e-05" -> "2.17686e-05", inf and nan as such),
+// "-" for an empty cell, text that is not a number unchanged. Never a cut
+// string.
+std::string CellForDisplay(const std::string& cell);
+
 // Writes a CSV with a header row; values with FormatDouble, NaN as empty cell.
 void WriteCsv(std::ostream& out, const std::vector<std::string>& columns,
               const std::vector<std::vector<double>>& rows);

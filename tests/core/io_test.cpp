@@ -8,6 +8,7 @@
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
 #include "src/io/json.h"
+#include "src/io/output_file.h"
 #include "src/run/filter_spec.h"
 
 namespace estlab {
@@ -38,6 +39,17 @@ TEST(CsvReader, ErrorsNameFileLineAndColumn) {
   EXPECT_THROW(ParseCsv("", "d.csv"), InputError);
   EXPECT_THROW(ParseCsv("t,t\n0,1\n", "d.csv"), InputError);
   EXPECT_THROW(ReadCsv("/nonexistent/file.csv"), InputError);
+}
+
+// Console tables format numbers, never cut their text (issue 14, item 1: a
+// mean of 2.176861944e-05 was printed as 2.17686194).
+TEST(CellForDisplay, FormatsNumbersAndNeverCutsThem) {
+  EXPECT_EQ(CellForDisplay("2.176861944e-05"), "2.17686e-05");
+  EXPECT_EQ(CellForDisplay("0.12345678912345"), "0.123457");
+  EXPECT_EQ(CellForDisplay("151527.12345678"), "151527");
+  EXPECT_EQ(CellForDisplay("-inf"), "-inf");
+  EXPECT_EQ(CellForDisplay(""), "-");
+  EXPECT_EQ(CellForDisplay("ok"), "ok");
 }
 
 TEST(Json, WritesNestedValuesAndNullForNonFinite) {

@@ -14,6 +14,7 @@ namespace estlab {
 namespace {
 
 using testing::FiltersAvailable;
+using testing::Replace;
 using testing::TinyStudy;
 
 // The error message of parsing `text`, or "" when it parses.
@@ -24,12 +25,6 @@ std::string ParseError(const std::string& text) {
     return e.what();
   }
   return "";
-}
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const auto pos = text.find(from);
-  EXPECT_NE(pos, std::string::npos) << from;
-  return text.replace(pos, from.size(), to);
 }
 
 TEST(StudyConfig, ParsesTheTinyStudy) {

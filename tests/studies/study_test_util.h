@@ -2,6 +2,8 @@
 #ifndef ESTLAB_TESTS_STUDIES_STUDY_TEST_UTIL_H_
 #define ESTLAB_TESTS_STUDIES_STUDY_TEST_UTIL_H_
 
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <string>
 
@@ -81,6 +83,13 @@ inline void WriteText(const std::string& path, const std::string& text) {
 }
 
 // The studies need the filter runner; skip where this build has none yet.
+// text with its first `from` replaced by `to` (a failure when absent).
+inline std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return text.replace(pos, from.size(), to);
+}
+
 inline bool FiltersAvailable() { return FindModel("pendulum").run_filter != nullptr; }
 
 }  // namespace estlab::testing
