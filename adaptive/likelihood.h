@@ -64,6 +64,7 @@
 #include "adaptive/likelihood_setup.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
+#include "models/model_traits.h"
 #include "src/filters/ekf_step.h"
 #include "src/filters/filter_util.h"
 #include "src/filters/gaussian_update.h"
@@ -74,7 +75,6 @@
 #include "src/ode/fixed_step.h"
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
-#include "models/model_traits.h"
 #include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"
@@ -132,7 +132,10 @@ class InnovationLikelihood {
   bool Nll(const T* theta, T* nll, std::string* why = nullptr) const {
     T sum(0.0);
     const bool ok = Run<T>(
-        theta, [&](const MeasT<T>& e, const T& log_det) { sum -= GaussianLogLikelihood<kM, T>(e, log_det); },
+        theta,
+        [&](const MeasT<T>& e, const T& log_det) {
+          sum -= GaussianLogLikelihood<kM, T>(e, log_det);
+        },
         why);
     *nll = sum;
     return ok && ScalarFinite(sum);
@@ -210,7 +213,6 @@ T NegLogLikelihood(const InnovationLikelihood<Model, Meas>& likelihood, const T*
 
 // ---------------------------------------------------------------------------
 // Implementation.
-
 
 template <class Model, class Meas>
 InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
@@ -339,7 +341,8 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
         Q = q_.template Matrix<T>(theta_q, q_dt);
       }
       try {
-        if (!Predict<T>(&b, t0, t1, u, Q, &reason)) return fail(d, k, "prediction failed: " + reason);
+        if (!Predict<T>(&b, t0, t1, u, Q, &reason))
+          return fail(d, k, "prediction failed: " + reason);
       } catch (const NumericalError& e) {  // CVODES failed
         if (why != nullptr) *why = e.what();
         return false;
@@ -425,8 +428,8 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
 template <class Model, class Meas>
 template <class T>
 bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z,
-                                               const MeasCovT<T>& R, MeasT<T>* whitened,
-                                               T* log_det, std::string* why) const {
+                                               const MeasCovT<T>& R, MeasT<T>* whitened, T* log_det,
+                                               std::string* why) const {
   GaussianUpdate<T, kN, kM> u;
   FilterStatus status;
   if (kf_) {
@@ -439,9 +442,9 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
       *why = "Cholesky of P- failed (not positive definite)";
       return false;
     }
-    status = SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                         &b->measurement_points, b->x, b->P, z, R, params_, &u,
-                                         why);
+    status =
+        SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
+                                    &b->measurement_points, b->x, b->P, z, R, params_, &u, why);
   } else {
     status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, params_, iterations_, &u, why);
   }

@@ -45,8 +45,7 @@ struct CartPole {
       {"M", &Params::M, "cart mass [kg]", Constraint::kPositive},
       {"m", &Params::m, "pole mass [kg]", Constraint::kPositive},
       {"b", &Params::b, "cart friction [N s/m]", Constraint::kNonNegative},
-      {"I", &Params::I, "pole inertia about its centre of mass [kg m^2]",
-       Constraint::kNonNegative},
+      {"I", &Params::I, "pole inertia about its centre of mass [kg m^2]", Constraint::kNonNegative},
       {"l", &Params::l, "pivot to pole centre of mass [m]", Constraint::kPositive},
       {"g", &Params::g, "gravity [m/s^2]", Constraint::kPositive},
   }};

@@ -3,8 +3,8 @@
 // "Optimal control of a double inverted pendulum on a cart", OGI CSE-04-006:
 //
 //   D(theta) q'' + C(theta, theta') q' + G(theta) = [1 0 0]^T u,  q = [x, th1, th2]
-//   D = [d1, d2 cos th1, d3 cos th2; d2 cos th1, d4, d5 cos(th1-th2); d3 cos th2, d5 cos(th1-th2), d6]
-//   C = [0, -d2 sin(th1) th1', -d3 sin(th2) th2';
+//   D = [d1, d2 cos th1, d3 cos th2; d2 cos th1, d4, d5 cos(th1-th2); d3 cos th2, d5 cos(th1-th2),
+//   d6] C = [0, -d2 sin(th1) th1', -d3 sin(th2) th2';
 //        0, 0, d5 sin(th1-th2) th2';
 //        0, -d5 sin(th1-th2) th1', 0]
 //   G = [0, -f1 sin th1, -f2 sin th2]
@@ -37,7 +37,8 @@ struct Dipc {
   static constexpr std::array<const char*, 6> kStateNames = {"x",      "v",      "theta1",
                                                              "omega1", "theta2", "omega2"};
   // Unit of each state ("" = dimensionless), for axis labels and reports.
-  static constexpr std::array<const char*, 6> kStateUnits = {"m", "m/s", "rad", "rad/s", "rad", "rad/s"};
+  static constexpr std::array<const char*, 6> kStateUnits = {"m",     "m/s", "rad",
+                                                             "rad/s", "rad", "rad/s"};
   static constexpr std::array<bool, 6> kAngleStates = {false, false, true, false, true, false};
   static constexpr std::array<std::pair<int, int>, 3> kPositionRatePairs = {
       {{0, 1}, {2, 3}, {4, 5}}};
@@ -111,10 +112,9 @@ struct Dipc {
   static Vec<double, 2> Invariants(const Vec<double, 6>& x, const Params& p) {
     const Coefficients k = Coeffs(p);
     const double v = x(1), th1 = x(2), w1 = x(3), th2 = x(4), w2 = x(5);
-    const double b = k.d2 * std::cos(th1), c = k.d3 * std::cos(th2),
-                 e = k.d5 * std::cos(th1 - th2);
-    const double kinetic = 0.5 * (k.d1 * v * v + k.d4 * w1 * w1 + k.d6 * w2 * w2) +
-                           b * v * w1 + c * v * w2 + e * w1 * w2;
+    const double b = k.d2 * std::cos(th1), c = k.d3 * std::cos(th2), e = k.d5 * std::cos(th1 - th2);
+    const double kinetic = 0.5 * (k.d1 * v * v + k.d4 * w1 * w1 + k.d6 * w2 * w2) + b * v * w1 +
+                           c * v * w2 + e * w1 * w2;
     // Potential measured from the hanging position (theta = pi), so V >= 0.
     const double potential = k.f1 * (1.0 + std::cos(th1)) + k.f2 * (1.0 + std::cos(th2));
     const double momentum = k.d1 * v + b * w1 + c * w2;

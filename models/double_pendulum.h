@@ -80,11 +80,10 @@ struct DoublePendulum {
   static bool InvariantsHold(const Params& /*p*/, double /*u*/) { return true; }
   static Vec<double, 1> Invariants(const Vec<double, 4>& x, const Params& p) {
     const double th1 = x(0), w1 = x(1), th2 = x(2), w2 = x(3);
-    const double kinetic =
-        0.5 * p.m1 * p.L1 * p.L1 * w1 * w1 +
-        0.5 * p.m2 *
-            (p.L1 * p.L1 * w1 * w1 + p.L2 * p.L2 * w2 * w2 +
-             2.0 * p.L1 * p.L2 * w1 * w2 * std::cos(th1 - th2));
+    const double kinetic = 0.5 * p.m1 * p.L1 * p.L1 * w1 * w1 +
+                           0.5 * p.m2 *
+                               (p.L1 * p.L1 * w1 * w1 + p.L2 * p.L2 * w2 * w2 +
+                                2.0 * p.L1 * p.L2 * w1 * w2 * std::cos(th1 - th2));
     // Potential measured from the hanging rest position, so E > 0 away from rest.
     const double potential = (p.m1 + p.m2) * p.g * p.L1 * (1.0 - std::cos(th1)) +
                              p.m2 * p.g * p.L2 * (1.0 - std::cos(th2));
@@ -104,8 +103,7 @@ struct DoublePendulum {
   struct Full {
     static constexpr const char* kName = "full";
     static constexpr int kDim = 4;
-    static constexpr std::array<const char*, 4> kOutputs = {"theta1", "omega1", "theta2",
-                                                            "omega2"};
+    static constexpr std::array<const char*, 4> kOutputs = {"theta1", "omega1", "theta2", "omega2"};
     static constexpr std::array<bool, 4> kAngleOutputs = {true, false, true, false};
     template <class T>
     static Vec<T, 4> Eval(const Vec<T, 4>& x, const Params& /*p*/) {

@@ -50,14 +50,14 @@ concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const typena
 };
 
 template <class Meas, class M>
-concept MeasurementOf =
-    DynamicModel<M> && requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
-      { Meas::kName } -> std::convertible_to<const char*>;
-      { Meas::kDim } -> std::convertible_to<int>;
-      requires Meas::kOutputs.size() == std::size_t(Meas::kDim);
-      requires Meas::kAngleOutputs.size() == std::size_t(Meas::kDim);
-      { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
-    };
+concept MeasurementOf = DynamicModel<M> &&
+    requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+  { Meas::kName } -> std::convertible_to<const char*>;
+  { Meas::kDim } -> std::convertible_to<int>;
+  requires Meas::kOutputs.size() == std::size_t(Meas::kDim);
+  requires Meas::kAngleOutputs.size() == std::size_t(Meas::kDim);
+  { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
+};
 
 // Every measurement in M::Measurements satisfies MeasurementOf<., M>.
 template <class M, class Tuple = typename M::Measurements>

@@ -221,4 +221,3 @@ StudyConfig LoadStudyConfig(const std::string& path) {
 }
 
 }  // namespace estlab
-

@@ -107,8 +107,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (noise.Has(ik) && !(ik[5] == 'q' ? q_tuned : r_tuned))
       noise.Fail(ik, std::string("an initial guess needs ") + ik[5] + " = tuned");
 
-  const std::string context =
-      " (for [" + sc.section + "] with [" + noise.section().full + "])";
+  const std::string context = " (for [" + sc.section + "] with [" + noise.section().full + "])";
   Combo combo;
   combo.filter = fi;
   combo.noise = ni;
@@ -118,11 +117,11 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     const auto it = origin.find(e.key());
     if (it != origin.end() && it->second != nullptr)
       err.Fail(it->second->line, it->second->where + ": " + e.message() + context);
-    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
-                                      "] and [" + noise.section().full + "]: " + e.what());
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section + "] and [" +
+                                      noise.section().full + "]: " + e.what());
   } catch (const InputError& e) {
-    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
-                                      "] and [" + noise.section().full + "]: " + e.what());
+    err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section + "] and [" +
+                                      noise.section().full + "]: " + e.what());
   }
   FilterSpec& spec = combo.spec;
   if (q_oracle) {

@@ -83,13 +83,6 @@ std::vector<Section> Scan(const std::string& text, const ConfigErrors& err) {
 // ---------------------------------------------------------------------------
 // Pre-scan: sections, keys and their lines (Program_options reports neither).
 
-
-
-
-
-
-
-
 // ---------------------------------------------------------------------------
 // Keys of each section type.
 
@@ -127,17 +120,11 @@ const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-
                                              "r-param",     "tune-datasets", "tune-starts",
                                              "tune-burn-in"};
 
-
 // ---------------------------------------------------------------------------
 // Reading the file with Program_options.
 
-
 // ---------------------------------------------------------------------------
 // Typed values with their line, for messages.
-
-
-
-
 
 // The keys of a [filter.NAME] section: the filter keys of the one key table
 // (src/options/filter_settings.h) that are not about the data, the model or
@@ -246,6 +233,5 @@ std::vector<Alternative> ParseAlternatives(const Entry& e, const ConfigErrors& e
       err.Fail(e.line, where + ": label '" + a.label + "' used twice");
   return alts;
 }
-
 
 }  // namespace estlab::study_config

@@ -62,8 +62,8 @@ bool IsLabel(const std::string& s);
 std::vector<Section> Scan(const std::string& text, const ConfigErrors& err);
 
 // The keys of each section type.
-extern const std::vector<std::string> kStudyKeys, kReportKeys, kReportRepeatedKeys,
-    kScenarioKeys, kNoiseKeys;
+extern const std::vector<std::string> kStudyKeys, kReportKeys, kReportRepeatedKeys, kScenarioKeys,
+    kNoiseKeys;
 std::vector<std::string> FilterKeys();
 
 // Reads the file with Program_options (unknown or repeated keys are errors

@@ -56,8 +56,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     sc.sample_x0 = mode == "sample";
   }
   if (!v.Has("dt")) v.FailSection("'dt' is required");
-  truth.dt =
-      Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
+  truth.dt = Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
   if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
   if (!v.Has("steps")) v.FailSection("'steps' is required");
   sc.steps = Checked(*get("steps"), err,
@@ -184,8 +183,8 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     sc.measure_at_t0 = Checked(*get("measure-at-t0"), err,
                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
   if (v.Has("input")) {
-    truth.input = Checked(*get("input"), err,
-                          [](const std::string& t) { return ParseNumber(t, "input"); });
+    truth.input =
+        Checked(*get("input"), err, [](const std::string& t) { return ParseNumber(t, "input"); });
     if (truth.input != 0 && !model.has_input)
       v.Fail("input", "model '" + model.name + "' has no input");
   }

@@ -677,8 +677,14 @@ std::string StudyReportMarkdown(const StudyConfig& c, const StudyTables& t,
   std::ostringstream md;
   md << "# Study `" << c.study.name << "`" << (c.title.empty() ? "" : ": " + c.title) << "\n\n";
   if (!c.study.description.empty()) md << c.study.description << "\n\n";
-  if (!c.paper.empty())
-    md << "Reproduces paper " << c.paper << " (see /work/shared/STUDIES.md).\n\n";
+  if (!c.paper.empty()) {
+    // The five built-in papers (000 ... 004) are cited in docs/paperNNN.md.
+    const bool built_in =
+        c.paper.size() == 3 && c.paper.find_first_not_of("0123456789") == std::string::npos;
+    md << "Reproduces paper " << c.paper
+       << (built_in ? " (cited in estlab's docs/paper" + c.paper + ".md)" : std::string())
+       << ".\n\n";
+  }
   md << state.runs << " Monte Carlo runs per scenario (study seed " << c.study.seed
      << "; run i of scenario s uses seed DeriveSeed({seed, s, i})), " << c.scenarios.size()
      << " scenario(s), " << c.filters.size() << " filter(s), " << c.noises.size()

@@ -4,9 +4,9 @@
 #include <iostream>
 
 #include "src/cli/commands.h"
-#include "src/options/filter_flags.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "src/options/filter_flags.h"
 #include "src/registry/registry.h"
 
 namespace po = boost::program_options;

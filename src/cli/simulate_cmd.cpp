@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "estlab_version.h"
-#include "src/core/parse.h"
 #include "src/cli/commands.h"
+#include "src/core/parse.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/registry/registry.h"
@@ -51,7 +51,8 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   j.Key("estlab_version").Value(ESTLAB_VERSION).Key("git_commit").Value(ESTLAB_GIT_COMMIT);
   j.Key("model").Value(model.name);
   j.Key("params").BeginObject();
-  for (size_t i = 0; i < model.params.size(); ++i) j.Key(model.params[i].name).Value(spec.params[i]);
+  for (size_t i = 0; i < model.params.size(); ++i)
+    j.Key(model.params[i].name).Value(spec.params[i]);
   j.EndObject();
   j.Key("states").Value(model.states);
   j.Key("x0").Value(spec.x0);
@@ -82,25 +83,32 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
 
 int RunSimulate(const std::vector<std::string>& args) {
   po::options_description desc("estlab simulate: integrate a model and write a trajectory CSV");
-  desc.add_options()("help,h", "this text")
-      ("model", po::value<std::string>(), "model name (see 'estlab list')")
-      ("param", po::value<std::vector<std::string>>()->composing(), "parameter override name=value (repeatable, or comma-separated)")
-      ("x0", po::value<std::vector<std::string>>()->composing(), "initial state name=value,... (unnamed states start at 0)")
-      ("t-end", po::value<std::string>()->default_value("10"), "final time [s]")
-      ("dt", po::value<std::string>()->default_value("0.01"), "output step [s]")
-      ("integrator", po::value<std::string>()->default_value("cvodes"), "cvodes | rk4 | euler | semi-implicit-euler")
-      ("method", po::value<std::string>()->default_value("default"), "CVODES method: bdf | adams | default (BDF for stiff models)")
-      ("rtol", po::value<std::string>()->default_value("1e-10"), "CVODES relative tolerance")
-      ("atol", po::value<std::string>()->default_value("1e-12"), "CVODES absolute tolerance")
-      ("max-steps", po::value<long>()->default_value(500000), "CVODES maximum internal steps per output step")
-      ("substeps", po::value<int>()->default_value(1), "fixed-step integrators: steps per output step")
-      ("input", po::value<std::string>()->default_value("0"), "constant input (cart-pole force F, dipc force u)")
-      ("process-noise-var", po::value<std::string>(), "per-state variances of the noise added after each step")
-      ("measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")
-      ("meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")
-      ("seed", po::value<unsigned long>()->default_value(1), "random seed")
-      ("out", po::value<std::string>(), "output CSV path")
-      ("json", "print a JSON summary on stdout");
+  desc.add_options()("help,h", "this text")("model", po::value<std::string>(),
+                                            "model name (see 'estlab list')")(
+      "param", po::value<std::vector<std::string>>()->composing(),
+      "parameter override name=value (repeatable, or comma-separated)")(
+      "x0", po::value<std::vector<std::string>>()->composing(),
+      "initial state name=value,... (unnamed states start at 0)")(
+      "t-end", po::value<std::string>()->default_value("10"), "final time [s]")(
+      "dt", po::value<std::string>()->default_value("0.01"), "output step [s]")(
+      "integrator", po::value<std::string>()->default_value("cvodes"),
+      "cvodes | rk4 | euler | semi-implicit-euler")(
+      "method", po::value<std::string>()->default_value("default"),
+      "CVODES method: bdf | adams | default (BDF for stiff models)")(
+      "rtol", po::value<std::string>()->default_value("1e-10"), "CVODES relative tolerance")(
+      "atol", po::value<std::string>()->default_value("1e-12"), "CVODES absolute tolerance")(
+      "max-steps", po::value<long>()->default_value(500000),
+      "CVODES maximum internal steps per output step")(
+      "substeps", po::value<int>()->default_value(1),
+      "fixed-step integrators: steps per output step")(
+      "input", po::value<std::string>()->default_value("0"),
+      "constant input (cart-pole force F, dipc force u)")(
+      "process-noise-var", po::value<std::string>(),
+      "per-state variances of the noise added after each step")(
+      "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
+      "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
+      "seed", po::value<unsigned long>()->default_value(1), "random seed")(
+      "out", po::value<std::string>(), "output CSV path")("json", "print a JSON summary on stdout");
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
   po::notify(vm);
@@ -122,14 +130,18 @@ int RunSimulate(const std::vector<std::string>& args) {
       "--x0");
   spec.t_end = ParseNumber(vm["t-end"].as<std::string>(), "--t-end");
   spec.dt = ParseNumber(vm["dt"].as<std::string>(), "--dt");
-  if (spec.t_end < 0) throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
+  if (spec.t_end < 0)
+    throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
   if (!(spec.dt > 0)) throw InputError("--dt must be > 0, got " + vm["dt"].as<std::string>());
   if (spec.t_end / spec.dt > 1e8) throw InputError("--t-end / --dt exceeds 1e8 output rows");
   spec.transition.integrator = ParseIntegrator(vm["integrator"].as<std::string>());
   const std::string method = vm["method"].as<std::string>();
-  if (method == "bdf") spec.transition.method = CvodesMethod::kBdf;
-  else if (method == "adams") spec.transition.method = CvodesMethod::kAdams;
-  else if (method != "default") throw InputError("--method: unknown CVODES method '" + method + "' (bdf, adams, default)");
+  if (method == "bdf")
+    spec.transition.method = CvodesMethod::kBdf;
+  else if (method == "adams")
+    spec.transition.method = CvodesMethod::kAdams;
+  else if (method != "default")
+    throw InputError("--method: unknown CVODES method '" + method + "' (bdf, adams, default)");
   spec.transition.rtol = ParseNumber(vm["rtol"].as<std::string>(), "--rtol");
   spec.transition.atol = ParseNumber(vm["atol"].as<std::string>(), "--atol");
   spec.transition.max_steps = vm["max-steps"].as<long>();
@@ -141,8 +153,10 @@ int RunSimulate(const std::vector<std::string>& args) {
     throw InputError("--input: model '" + model.name + "' has no input");
   }
   if (vm.count("process-noise-var")) {
-    spec.process_noise_var = ParseList(vm["process-noise-var"].as<std::string>(), "--process-noise-var");
-    RequireLength(spec.process_noise_var, model.states.size(), "--process-noise-var", "one per state");
+    spec.process_noise_var =
+        ParseList(vm["process-noise-var"].as<std::string>(), "--process-noise-var");
+    RequireLength(spec.process_noise_var, model.states.size(), "--process-noise-var",
+                  "one per state");
     RequireNonNegative(spec.process_noise_var, "--process-noise-var");
   }
   if (vm.count("measure")) {
@@ -179,7 +193,8 @@ int RunSimulate(const std::vector<std::string>& args) {
     return 1;
   }
   WriteCsv(csv.stream(), result.columns, result.rows);
-  sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator), method_name);
+  sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
+                                  method_name);
   csv.Commit();
   sidecar.Commit();
 

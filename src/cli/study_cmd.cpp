@@ -7,8 +7,8 @@
 #include <iomanip>
 #include <iostream>
 
-#include "src/core/parse.h"
 #include "src/cli/commands.h"
+#include "src/core/parse.h"
 #include "src/core/types.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"

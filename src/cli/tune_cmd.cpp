@@ -8,11 +8,11 @@
 #include <optional>
 #include <sstream>
 
-#include "src/core/parse.h"
 #include "src/cli/commands.h"
-#include "src/options/filter_flags.h"
+#include "src/core/parse.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "src/options/filter_flags.h"
 #include "src/registry/registry.h"
 
 namespace po = boost::program_options;
@@ -94,8 +94,8 @@ bool JsonNumberArray(const std::string& text, const std::string& key, std::vecto
 // --init-q-scalar s -> init-q-diag "s,s,..." in the settings (the user's own
 // text repeated, so BuildFilterSpec reads exactly what was written).
 void ExpandScalarOption(const po::variables_map& vm, const std::string& scalar_opt,
-                        const std::string& diag_opt, const std::vector<std::string>& others,
-                        int n, FilterSettings* settings) {
+                        const std::string& diag_opt, const std::vector<std::string>& others, int n,
+                        FilterSettings* settings) {
   if (!vm.count(scalar_opt)) return;
   for (const auto& o : others) {
     if (settings->Given(o)) throw InputError("give only one of --" + scalar_opt + " and --" + o);

@@ -68,8 +68,7 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
       *why = "Cholesky of S = H P H^T + R failed in IEKF iteration " + std::to_string(i);
       return FilterStatus::kFactorizationFailed;
     }
-    x_iter = x_prior +
-             out->K * (r - H * WrapResidual<N, T>(x_prior - x_iter, Model::kAngleStates));
+    x_iter = x_prior + out->K * (r - H * WrapResidual<N, T>(x_prior - x_iter, Model::kAngleStates));
   }
   // P+ = (I - K H) P- (I - K H)^T + K R K^T with the last K, H
   out->P = JosephUpdate<N, M, T>(P, out->K, H, R);

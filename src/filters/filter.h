@@ -67,7 +67,7 @@ struct StepResult {
 };
 
 template <DynamicModel Model, class Meas>
-  requires MeasurementOf<Meas, Model>
+requires MeasurementOf<Meas, Model>
 class Filter {
  public:
   static constexpr int kN = Model::kStateDim;

@@ -46,7 +46,7 @@ struct ParticleOptions {
 
 // Online noise adaptation of the sigma-point filter (noise_adapter.h).
 struct AdaptSpec {
-  std::string rule;        // "" (off), "sage-husa", "innovation-matching"
+  std::string rule;  // "" (off), "sage-husa", "innovation-matching"
   bool adapt_q = false;
   bool adapt_r = true;
   double forgetting = 0.97;  // Sage-Husa b

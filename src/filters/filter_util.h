@@ -131,8 +131,8 @@ bool KalmanGain(const MatT<T, M, N>& H, const MatT<T, N, N>& P, const MatT<T, M,
 // Joseph form, valid for any gain K:  P+ = (I - K H) P (I - K H)^T + K R K^T,
 // symmetrised.
 template <int N, int M, class T = double>
-MatT<T, N, N> JosephUpdate(const MatT<T, N, N>& P, const MatT<T, N, M>& K,
-                           const MatT<T, M, N>& H, const MatT<T, M, M>& R) {
+MatT<T, N, N> JosephUpdate(const MatT<T, N, N>& P, const MatT<T, N, M>& K, const MatT<T, M, N>& H,
+                           const MatT<T, M, M>& R) {
   const MatT<T, N, N> IKH = MatT<T, N, N>::Identity() - K * H;
   MatT<T, N, N> Pp = IKH * P * IKH.transpose() + K * R * K.transpose();
   Symmetrize<N, T>(&Pp);

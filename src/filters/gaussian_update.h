@@ -17,11 +17,11 @@ namespace estlab {
 
 template <class T, int N, int M>
 struct GaussianUpdate {
-  Vec<T, N> x;          // x+
-  MatT<T, N, N> P;      // P+
-  MatT<T, N, M> K;      // the gain applied (IEKF: the last iteration's)
-  Vec<T, M> nu;         // innovation at the prior, angle outputs wrapped
-  MatT<T, M, M> S, L;   // its covariance S = L L^T
+  Vec<T, N> x;         // x+
+  MatT<T, N, N> P;     // P+
+  MatT<T, N, M> K;     // the gain applied (IEKF: the last iteration's)
+  Vec<T, M> nu;        // innovation at the prior, angle outputs wrapped
+  MatT<T, M, M> S, L;  // its covariance S = L L^T
 };
 
 }  // namespace estlab

@@ -144,8 +144,8 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     B_ = InputJacobian<Model>(lin_.x_star, lin_.u_star, params_);
     c_ = ContinuousRhs<Model>(lin_.x_star, lin_.u_star, params_);
     lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, params_, &lin_.H);
-    linear_finite_ =
-        A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() && lin_.h_star.allFinite();
+    linear_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() &&
+                     lin_.h_star.allFinite();
     cached_dt_ = -1.0;  // invalidate the discretisation cache
   }
 

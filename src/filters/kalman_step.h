@@ -49,21 +49,24 @@ void KfPredict(const KfLinearization<Model::kStateDim, M>& lin,
   *x = x_star + step.phi.template cast<T>() * delta +
        step.gamma.template cast<T>() * T(u - lin.u_star) + step.drift.template cast<T>();
   // P- = Phi P Phi^T + Q
-  MatT<T, N, N> P_pred = step.phi.template cast<T>() * (*P) * step.phi.transpose().template cast<T>() + Q;
+  MatT<T, N, N> P_pred =
+      step.phi.template cast<T>() * (*P) * step.phi.transpose().template cast<T>() + Q;
   Symmetrize<N, T>(&P_pred);
   *P = P_pred;
 }
 
 template <class Model, class Meas, class T = double>
 FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim>& lin,
-                      const Vec<T, Model::kStateDim>& x, const MatT<T, Model::kStateDim, Model::kStateDim>& P,
+                      const Vec<T, Model::kStateDim>& x,
+                      const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                       const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
                       GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const MatT<T, M, N> H = lin.H.template cast<T>();
   // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
-  const Vec<T, N> delta = WrapResidual<N, T>(x - lin.x_star.template cast<T>(), Model::kAngleStates);
+  const Vec<T, N> delta =
+      WrapResidual<N, T>(x - lin.x_star.template cast<T>(), Model::kAngleStates);
   const Vec<T, M> z_pred = lin.h_star.template cast<T>() + H * delta;
   out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);
   // S = H P H^T + R,  K = P H^T S^-1

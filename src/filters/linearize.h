@@ -65,9 +65,9 @@ Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>&
 // for x of any scalar T (double; ceres::Jet, whose H is then a nested Jet:
 // src/ode/nested_jet.h).
 template <class Model, class Meas, class T = double>
-Vec<T, Meas::kDim> MeasurementAndJacobian(const Vec<T, Model::kStateDim>& x,
-                                          const typename Model::Params& params,
-                                          std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
+Vec<T, Meas::kDim> MeasurementAndJacobian(
+    const Vec<T, Model::kStateDim>& x, const typename Model::Params& params,
+    std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   if (H == nullptr) return Meas::template Eval<T>(x, params);

@@ -161,7 +161,8 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
       predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
       const Measurement nu_i =
           WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
-      const Measurement whitened = r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
+      const Measurement whitened =
+          r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
       log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
     }
     // Predicted-measurement moments with the prior weights:

@@ -117,8 +117,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     have_propagated_ = false;
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status = SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z,
-                                                         R, params_, &u, &why);
+    const FilterStatus status =
+        SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z, R, params_, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);

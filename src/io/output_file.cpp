@@ -15,7 +15,8 @@ namespace estlab {
 OutputFile::OutputFile(const std::string& path)
     : path_(path), tmp_path_(path + ".tmp." + std::to_string(::getpid())) {
   if (path.empty()) throw InputError("output path is empty");
-  if (std::filesystem::is_directory(path)) throw InputError("output path '" + path + "' is a directory");
+  if (std::filesystem::is_directory(path))
+    throw InputError("output path '" + path + "' is a directory");
   stream_.open(tmp_path_, std::ios::out | std::ios::trunc);
   if (!stream_) throw InputError("cannot write output file '" + path + "'");
 }

@@ -8,7 +8,8 @@
 // The functor must be a generic lambda (or template) accepting
 // Vec<ceres::Jet<double, N>, N> and returning Vec<same Jet, M>.
 // WARNING: include this header only in translation units that instantiate
-// models (the generated per-model units of models/model_list.cmake, tests); ceres/jet.h is a heavy template.
+// models (the generated per-model units of models/model_list.cmake, tests); ceres/jet.h is a heavy
+// template.
 #ifndef ESTLAB_ODE_AUTODIFF_H_
 #define ESTLAB_ODE_AUTODIFF_H_
 

@@ -7,8 +7,8 @@
 #include <fstream>
 
 #include "src/core/parse.h"
-#include "src/options/filter_settings.h"
 #include "src/io/csv_reader.h"
+#include "src/options/filter_settings.h"
 
 namespace po = boost::program_options;
 

@@ -159,8 +159,8 @@ void ReadNoise(const Reader& r, const std::string& np, int n, int m, const std::
   const std::string qd = np + "q-diag", qm = np + "q", qw = np + "q-white-accel";
   const int q_given = int(r.Given(qd)) + int(r.Given(qm)) + int(r.Given(qw));
   if (q_given != 1)
-    throw KeyError(qd, "give exactly one of --" + qd + ", --" + qm + ", --" + qw +
-                           " (process noise Q)");
+    throw KeyError(
+        qd, "give exactly one of --" + qd + ", --" + qm + ", --" + qw + " (process noise Q)");
   if (r.Given(qw)) {
     spec->q_white_accel = true;
     spec->qc = r.Number(qw);
@@ -226,8 +226,9 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   FilterSpec spec;
   const int n = int(model.states.size());
   spec.measurement = r.Text("measure");
-  const MeasurementDesc& meas =
-      ForKey("measure", [&]() -> const MeasurementDesc& { return model.FindMeasurement(spec.measurement); });
+  const MeasurementDesc& meas = ForKey("measure", [&]() -> const MeasurementDesc& {
+    return model.FindMeasurement(spec.measurement);
+  });
   const int m = int(meas.outputs.size());
   spec.params = ForKey("param", [&] { return model.ResolveParams(r.Assignments("param")); });
   ReadFilterKind(r, &spec);

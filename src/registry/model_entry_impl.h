@@ -6,8 +6,8 @@
 
 #include "adaptive/tuner.h"
 #include "models/model.h"
-#include "src/ode/transition_impl.h"
 #include "models/model_traits.h"
+#include "src/ode/transition_impl.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_run_impl.h"
 #include "src/sim/simulator_impl.h"
@@ -15,8 +15,7 @@
 namespace estlab {
 
 template <DynamicModel Model>
-  requires kAllMeasurementsOf<Model>
-ModelEntry MakeModelEntry() {
+requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   ModelEntry e;
   e.name = Model::kName;
   e.description = Model::kDescription;
@@ -50,14 +49,14 @@ ModelEntry MakeModelEntry() {
 
 }  // namespace estlab
 
-#define ESTLAB_DEFINE_MODEL_ENTRY(Model, EntryFn)                                             \
-  template std::unique_ptr<estlab::Transition<Model>> estlab::MakeTransition<Model>(          \
-      const Model::Params&, const estlab::TransitionOptions&);                                \
-  namespace estlab {                                                                          \
-  const ModelEntry& EntryFn() {                                                               \
-    static const ModelEntry entry = MakeModelEntry<Model>();                                  \
-    return entry;                                                                             \
-  }                                                                                           \
+#define ESTLAB_DEFINE_MODEL_ENTRY(Model, EntryFn)                                    \
+  template std::unique_ptr<estlab::Transition<Model>> estlab::MakeTransition<Model>( \
+      const Model::Params&, const estlab::TransitionOptions&);                       \
+  namespace estlab {                                                                 \
+  const ModelEntry& EntryFn() {                                                      \
+    static const ModelEntry entry = MakeModelEntry<Model>();                         \
+    return entry;                                                                    \
+  }                                                                                  \
   }
 
 #endif  // ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_

@@ -44,7 +44,7 @@ struct ModelEntry {
   std::string description;
   std::vector<std::string> states;
   std::vector<bool> angle_states;
-  std::vector<std::string> state_units;  // "" = dimensionless
+  std::vector<std::string> state_units;                  // "" = dimensionless
   std::vector<std::pair<int, int>> position_rate_pairs;  // (position, rate) state indices
   std::vector<ParamDesc> params;
   std::vector<MeasurementDesc> measurements;
@@ -55,12 +55,13 @@ struct ModelEntry {
   SimulationResult (*simulate)(const SimulationSpec&) = nullptr;
   FilterRunOutput (*run_filter)(const FilterSpec&, const FilterData&) = nullptr;
   // Q/R tuning by maximum innovation likelihood (adaptive/tuner.h).
-  TuneResult (*tune)(const FilterSpec&, const TunerOptions&, const std::vector<FilterData>&) =
-      nullptr;
+  TuneResult (*tune)(const FilterSpec&, const TunerOptions&,
+                     const std::vector<FilterData>&) = nullptr;
 
   // Defaults with "name=value" overrides applied and validated; throws
   // InputError naming an unknown or invalid parameter.
-  std::vector<double> ResolveParams(const std::vector<std::pair<std::string, double>>& overrides) const;
+  std::vector<double> ResolveParams(
+      const std::vector<std::pair<std::string, double>>& overrides) const;
   // Full state from "name=value" pairs (unnamed states are 0).
   std::vector<double> ResolveState(const std::vector<std::pair<std::string, double>>& values,
                                    const std::string& option) const;

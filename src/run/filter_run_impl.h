@@ -19,13 +19,13 @@
 #include <string>
 #include <vector>
 
+#include "models/model_traits.h"
 #include "src/core/white_accel.h"
 #include "src/filters/ekf.h"
 #include "src/filters/kalman.h"
 #include "src/filters/noise_adapter.h"
 #include "src/filters/particle.h"
 #include "src/filters/sigma_point.h"
-#include "models/model_traits.h"
 #include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"
@@ -117,8 +117,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   auto fail = [&](size_t k, const std::string& what) {
     s.ok = false;
     s.status = "diverged";
-    s.message = "filter " + s.filter + " stopped at step " + std::to_string(k) + " (t = " +
-                FormatNumber(data.t[k]) + ", " + data.path + " line " +
+    s.message = "filter " + s.filter + " stopped at step " + std::to_string(k) +
+                " (t = " + FormatNumber(data.t[k]) + ", " + data.path + " line " +
                 std::to_string(k < data.lines.size() ? data.lines[k] : 0) + "): " + what;
     return false;
   };
@@ -215,9 +215,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
 template <class Model>
 FilterRunOutput RunFilter(const FilterSpec& spec, const FilterData& data) {
   FilterRunOutput out;
-  const bool found = VisitMeasurement<Model>(spec.measurement, [&](auto m) {
-    out = RunFilterWith<Model, decltype(m)>(spec, data);
-  });
+  const bool found = VisitMeasurement<Model>(
+      spec.measurement, [&](auto m) { out = RunFilterWith<Model, decltype(m)>(spec, data); });
   if (!found) throw InputError("unknown measurement '" + spec.measurement + "'");
   return out;
 }

@@ -18,7 +18,6 @@ enum class FilterKind { kKf, kEkf, kUkf, kCkf, kGhkf, kPf };
 FilterKind ParseFilterKind(const std::string& name);
 const char* FilterKindName(FilterKind kind);
 
-
 struct FilterSpec {
   std::vector<double> params;  // model parameters in registry order
   std::string measurement;

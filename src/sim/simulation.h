@@ -24,8 +24,8 @@ struct SimulationSpec {
   // Full process-noise covariance per output step (n x n, row-major, PSD);
   // used instead of process_noise_var when not empty.
   std::vector<double> process_noise_cov;
-  std::string measurement;                // empty = none
-  std::vector<double> meas_noise_var;     // empty = none, else one per output
+  std::string measurement;             // empty = none
+  std::vector<double> meas_noise_var;  // empty = none, else one per output
   uint64_t seed = 1;
 };
 

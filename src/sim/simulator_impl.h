@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "models/model_traits.h"
 #include "src/core/random.h"
 #include "src/ode/transition.h"
-#include "models/model_traits.h"
 #include "src/sim/simulation.h"
 
 namespace estlab {
@@ -70,8 +70,7 @@ SimulationResult Simulate(const SimulationSpec& spec) {
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < N; ++j) Q(i, j) = spec.process_noise_cov[i * N + j];
     Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(0.5 * (Q + Q.transpose()));
-    noise_factor = eig.eigenvectors() *
-                   eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+    noise_factor = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
                    eig.eigenvectors().transpose();
     has_process_noise = true;
   } else if (!spec.process_noise_var.empty()) {

@@ -79,9 +79,12 @@ struct Kind {
   bool redraw;
 };
 constexpr Kind kKinds[] = {
-    {"kf", FilterKind::kKf, 1, true},      {"ekf", FilterKind::kEkf, 1, true},
-    {"iekf", FilterKind::kEkf, 3, true},   {"ukf", FilterKind::kUkf, 1, true},
-    {"ukf-propagate", FilterKind::kUkf, 1, false}, {"ckf", FilterKind::kCkf, 1, true},
+    {"kf", FilterKind::kKf, 1, true},
+    {"ekf", FilterKind::kEkf, 1, true},
+    {"iekf", FilterKind::kEkf, 3, true},
+    {"ukf", FilterKind::kUkf, 1, true},
+    {"ukf-propagate", FilterKind::kUkf, 1, false},
+    {"ckf", FilterKind::kCkf, 1, true},
     {"ghkf", FilterKind::kGhkf, 1, true},
 };
 
@@ -136,9 +139,10 @@ TEST(LikelihoodConsistency, NllEqualsMinusTheFiltersSummedLogLikelihood) {
       }
     }
   }
-  std::printf("NLL vs -sum loglik: %d cases, worst relative difference %.3g; %d cases where "
-              "both the filter and the likelihood fail\n",
-              cases, worst, failed);
+  std::printf(
+      "NLL vs -sum loglik: %d cases, worst relative difference %.3g; %d cases where "
+      "both the filter and the likelihood fail\n",
+      cases, worst, failed);
   EXPECT_GE(cases, 50);  // 8 measurements x 7 kinds = 56, less the failing ones
   EXPECT_LE(failed, 2);
 }

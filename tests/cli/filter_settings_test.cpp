@@ -39,9 +39,9 @@ std::pair<std::string, std::string> ErrorOf(const FilterSettings& s) {
 TEST(FilterSettings, CommandLineAndDirectSettingsGiveTheSameSpec) {
   po::options_description desc;
   cli::AddFilterOptions(&desc);
-  const std::vector<std::string> args = {"--measure", "sin", "--q-diag", "1e-4,1e-3",
-                                         "--r-diag", "0.01", "--filter", "ghkf",
-                                         "--gh-order", "5", "--x0", "theta=0.3"};
+  const std::vector<std::string> args = {"--measure",  "sin",  "--q-diag", "1e-4,1e-3",
+                                         "--r-diag",   "0.01", "--filter", "ghkf",
+                                         "--gh-order", "5",    "--x0",     "theta=0.3"};
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
   const FilterSpec from_cli = cli::BuildFilterSpec(vm, FindModel("pendulum"));
@@ -95,7 +95,8 @@ TEST(FilterSettings, ErrorsNameTheKey) {
     s.Set(c.key, c.value);
     const auto [key, message] = ErrorOf(s);
     EXPECT_EQ(key, c.expect_key) << c.key << " = " << c.value << ": " << message;
-    EXPECT_EQ(message.rfind(c.expect_message, 0), 0u) << c.key << " = " << c.value << ": " << message;
+    EXPECT_EQ(message.rfind(c.expect_message, 0), 0u)
+        << c.key << " = " << c.value << ": " << message;
   }
   // The filter's own check, for the filter chosen: a PF with no particles.
   FilterSettings pf = Pendulum();

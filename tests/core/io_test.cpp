@@ -54,7 +54,14 @@ TEST(CellForDisplay, FormatsNumbersAndNeverCutsThem) {
 
 TEST(Json, WritesNestedValuesAndNullForNonFinite) {
   JsonWriter j;
-  j.BeginObject().Key("a").Value(1.5).Key("b").BeginArray().Value(1L).Value(std::nan("")).EndArray();
+  j.BeginObject()
+      .Key("a")
+      .Value(1.5)
+      .Key("b")
+      .BeginArray()
+      .Value(1L)
+      .Value(std::nan(""))
+      .EndArray();
   j.Key("s").Value("q\"x").EndObject();
   EXPECT_EQ(j.str(), "{\"a\": 1.5, \"b\": [1, null], \"s\": \"q\\\"x\"}");
 }
