@@ -138,15 +138,10 @@ class InnovationLikelihood {
         },
         why);
     *nll = sum;
-    return ok && ScalarFinite(sum);
+    return ok && std::isfinite(ScalarPart(sum));
   }
 
  private:
-  template <class T>
-  static bool ScalarFinite(const T& v) {
-    return std::isfinite(ScalarPart(v));
-  }
-
   // KF: one discretisation per distinct step length of the data.
   const KfDiscretization<kN>* FindKfStep(double dt) const {
     for (const auto& [step_dt, step] : kf_steps_)

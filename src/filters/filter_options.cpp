@@ -1,10 +1,71 @@
+// The checks of the filter options (filter_options.h); every message starts
+// with the option key it is about.
 #include "src/filters/filter_options.h"
 
+#include <cmath>
 #include <string>
 
 #include "src/core/types.h"
 
 namespace estlab {
+
+bool EkfOptions::IsValid(std::string* error) const {
+  if (iterations < 1 || iterations > 100) {
+    if (error != nullptr)
+      *error = "iterations: must be in [1, 100], got " + std::to_string(iterations);
+    return false;
+  }
+  return true;
+}
+
+bool KfOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  for (size_t i = 0; i < operating_point.size(); ++i) {
+    if (!std::isfinite(operating_point[i]))
+      return fail("linearize-at: operating point component " + std::to_string(i) +
+                  " is not finite");
+  }
+  if (!std::isfinite(operating_input)) return fail("input: the operating input u* is not finite");
+  return true;
+}
+
+ResampleScheme ParseResampleScheme(const std::string& name) {
+  if (name == "multinomial") return ResampleScheme::kMultinomial;
+  if (name == "systematic") return ResampleScheme::kSystematic;
+  if (name == "stratified") return ResampleScheme::kStratified;
+  if (name == "residual") return ResampleScheme::kResidual;
+  throw InputError("resample: unknown scheme '" + name +
+                   "' (expected multinomial, systematic, stratified or residual)");
+}
+
+const char* ResampleSchemeName(ResampleScheme scheme) {
+  switch (scheme) {
+    case ResampleScheme::kMultinomial:
+      return "multinomial";
+    case ResampleScheme::kSystematic:
+      return "systematic";
+    case ResampleScheme::kStratified:
+      return "stratified";
+    case ResampleScheme::kResidual:
+      return "residual";
+  }
+  return "?";
+}
+
+bool ParticleOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (num_particles < 1)
+    return fail("particles: must be >= 1, got " + std::to_string(num_particles));
+  if (!(ess_threshold >= 0.0 && ess_threshold <= 1.0))
+    return fail("ess-threshold: must be in [0, 1], got " + FormatNumber(ess_threshold));
+  return true;
+}
 
 bool AdaptSpec::IsValid(std::string* error) const {
   auto fail = [&](const std::string& what) {

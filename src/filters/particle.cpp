@@ -8,41 +8,6 @@
 
 namespace estlab {
 
-ResampleScheme ParseResampleScheme(const std::string& name) {
-  if (name == "multinomial") return ResampleScheme::kMultinomial;
-  if (name == "systematic") return ResampleScheme::kSystematic;
-  if (name == "stratified") return ResampleScheme::kStratified;
-  if (name == "residual") return ResampleScheme::kResidual;
-  throw InputError("resample: unknown scheme '" + name +
-                   "' (expected multinomial, systematic, stratified or residual)");
-}
-
-const char* ResampleSchemeName(ResampleScheme scheme) {
-  switch (scheme) {
-    case ResampleScheme::kMultinomial:
-      return "multinomial";
-    case ResampleScheme::kSystematic:
-      return "systematic";
-    case ResampleScheme::kStratified:
-      return "stratified";
-    case ResampleScheme::kResidual:
-      return "residual";
-  }
-  return "?";
-}
-
-bool ParticleOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& what) {
-    if (error != nullptr) *error = what;
-    return false;
-  };
-  if (num_particles < 1)
-    return fail("particles: must be >= 1, got " + std::to_string(num_particles));
-  if (!(ess_threshold >= 0.0 && ess_threshold <= 1.0))
-    return fail("ess-threshold: must be in [0, 1], got " + FormatNumber(ess_threshold));
-  return true;
-}
-
 double LogSumExp(const Eigen::VectorXd& v) {
   if (v.size() == 0) return -std::numeric_limits<double>::infinity();
   const double m = v.maxCoeff();

@@ -156,8 +156,6 @@ UnitSigmaPoints MakeUnitSigmaPoints(int n, const SigmaPointOptions& options) {
 }
 
 SigmaPointSet MakeSigmaPointSet(int n, const SigmaPointOptions& options) {
-  std::string error;
-  if (!options.IsValid(&error)) throw InputError(error);
   UnitSigmaPoints unit = MakeUnitSigmaPoints(n, options);
   SigmaPointSet set;
   set.unit_points = std::move(unit.points);
