@@ -12,7 +12,7 @@
 // Jacobian F for the EKF) through the fixed-step integrators, with Q(theta),
 // R(theta) of scalar T (noise_param.h).
 //
-//   KF    the model linearised once about x* (spec.linearize_at, else the
+//   KF    the model linearised once about x* (KfOptions::operating_point, else the
 //         prior mean) and discretised exactly over each step length of the
 //         data (LinearizedKf, computed once in double).
 //
@@ -59,6 +59,7 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "adaptive/likelihood_setup.h"
@@ -75,7 +76,6 @@
 #include "src/ode/fixed_step.h"
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
-#include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"
 
@@ -148,7 +148,8 @@ class InnovationLikelihood {
       if (step_dt == dt) return &step;
     return nullptr;
   }
-  void SetUpKf(const std::vector<FilterData>& datasets);
+  void SetUpKf(const KfOptions& options, const std::vector<FilterData>& datasets);
+  void SetUpCvodes(TransitionOptions o);
 
   // The belief of one run, of scalar T, and the sigma points' storage.
   template <class T>
@@ -240,32 +241,37 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     }
     terms_ += updates - options.burn_in;
   }
-  if (spec.kind == FilterKind::kKf) {
-    SetUpKf(datasets);
-  } else if (spec.transition.integrator == Integrator::kCvodes) {
-    TransitionOptions o = spec.transition;
-    o.rtol = std::min(o.rtol, kCvodesRtol);
-    o.atol = std::min(o.atol, kCvodesAtol);
-    std::string error;
-    if (!o.IsValid(&error)) throw InputError(error);
-    cvodes_options_ = o;
-    cvodes_ = MakeTransition<Model>(params_, o);
-  }
-  switch (spec.kind) {
-    case FilterKind::kEkf:
-      iterations_ = EkfOptionsOf(spec).iterations;
-      break;
-    case FilterKind::kUkf:
-    case FilterKind::kCkf:
-    case FilterKind::kGhkf:
-      sigma_ = true;
-      sigma_redraw_ = spec.sigma_redraw;
-      sigma_set_ = MakeSigmaPointSet(kN, SigmaPointOptionsOf(spec));
-      break;
-    case FilterKind::kKf:
-    case FilterKind::kPf:  // rejected by CheckSpec
-      break;
-  }
+  // Each tunable kind's set-up; a kind missing here does not compile.
+  std::visit(
+      [&](const auto& o) {
+        using O = std::decay_t<decltype(o)>;
+        if constexpr (std::is_same_v<O, KfOptions>) {
+          SetUpKf(o, datasets);
+          return;
+        } else if constexpr (std::is_same_v<O, EkfOptions>) {
+          iterations_ = o.iterations;
+        } else if constexpr (std::is_same_v<O, SigmaPointOptions>) {
+          sigma_ = true;
+          sigma_redraw_ = o.update == SigmaPointOptions::Update::kRedraw;
+          sigma_set_ = MakeSigmaPointSet(kN, o);
+        } else {
+          static_assert(std::is_same_v<O, ParticleOptions>,
+                        "a new filter kind needs its case here, or tunable = false");
+          return;  // not tunable: rejected by CheckSpec
+        }
+        if (spec.transition.integrator == Integrator::kCvodes) SetUpCvodes(spec.transition);
+      },
+      spec.filter);
+}
+
+template <class Model, class Meas>
+void InnovationLikelihood<Model, Meas>::SetUpCvodes(TransitionOptions o) {
+  o.rtol = std::min(o.rtol, kCvodesRtol);
+  o.atol = std::min(o.atol, kCvodesAtol);
+  std::string error;
+  if (!o.IsValid(&error)) throw InputError(error);
+  cvodes_options_ = o;
+  cvodes_ = MakeTransition<Model>(params_, o);
 }
 
 template <class Model, class Meas>
@@ -451,9 +457,10 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
 }
 
 template <class Model, class Meas>
-void InnovationLikelihood<Model, Meas>::SetUpKf(const std::vector<FilterData>& datasets) {
+void InnovationLikelihood<Model, Meas>::SetUpKf(const KfOptions& options,
+                                                const std::vector<FilterData>& datasets) {
   kf_ = true;
-  LinearizedKf<Model, Meas> kf(params_, KfOptionsOf(spec_));  // throws for a bad x*
+  LinearizedKf<Model, Meas> kf(params_, options);  // throws for a bad x*
   kf.Initialize(x0_, p0_);
   kf_lin_ = kf.linearization();
   // Phi, Gamma, d for every step length that Run() will meet.

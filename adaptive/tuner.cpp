@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "src/core/types.h"
-#include "src/run/filter_options.h"
 
 namespace estlab {
 
@@ -91,10 +90,12 @@ bool IsTunable(const FilterSpec& spec, const TunerOptions& options, int state_di
     return false;
   };
   if (!options.IsValid(error)) return false;
-  if (spec.kind == FilterKind::kPf) {
-    return fail(
-        "the tuner supports the kf, ekf, iekf, ukf, ckf and ghkf filters, not pf (its "
-        "likelihood is a random, non-smooth function of Q and R)");
+  if (!InfoOf(spec.kind()).tunable) {
+    std::string kinds;
+    for (const FilterKindInfo& info : FilterKinds())
+      if (info.tunable) kinds += std::string(kinds.empty() ? "" : ", ") + info.name;
+    return fail("the tuner supports the " + kinds + " filters, not " + FilterKindName(spec.kind()) +
+                " (its likelihood is a random, non-smooth function of Q and R)");
   }
   // The filter's own check of its options (the one estlab filter applies).
   if (!IsValidFilterOptions(spec, state_dim, error)) return false;

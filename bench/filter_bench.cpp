@@ -214,8 +214,7 @@ void Tuner_(benchmark::State& state, double guess, bool std_errors) {
   FilterSpec spec;
   spec.params = sim.params;
   spec.measurement = "full";
-  spec.kind = FilterKind::kUkf;
-  spec.alpha = 1.0;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 1.0};
   spec.transition.integrator = Integrator::kRk4;
   spec.x0 = sim.x0;
   spec.p0.assign(16, 0.0);

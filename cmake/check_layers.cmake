@@ -5,6 +5,7 @@
 #
 #   0 core       src/core         types, parsing, white-accel Q
 #   1 io         src/io           CSV, JSON, output files
+#   1 modelfile  src/modelfile    the .model language: parse, check, generate C++
 #   2 models     models           the model contract (model.h) and the models
 #   3 ode        src/ode          transitions: fixed-step, CVODES, AD
 #   4 filters    src/filters      the filter steps and classes, noise adapters
@@ -17,7 +18,7 @@
 #
 # Run by hand: cmake -DESTLAB_SOURCE_DIR=. -P cmake/check_layers.cmake
 set(ESTLAB_LAYERS
-  "src/core=0" "src/io=1" "models=2" "src/ode=3" "src/filters=4" "src/run=5" "src/sim=5"
+  "src/core=0" "src/io=1" "src/modelfile=1" "models=2" "src/ode=3" "src/filters=4" "src/run=5" "src/sim=5"
   "adaptive=6" "src/registry=7" "src/options=8" "studies=9" "src/cli=10")
 
 function(estlab_layer_of path out_rank out_folder)

@@ -205,7 +205,8 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
       message = cb.tune_failure;
     } else {
       FilterSpec spec = cb.spec;
-      spec.seed = ComboSeed(seed, fname, nname);
+      if (auto* pf = std::get_if<ParticleOptions>(&spec.filter))
+        pf->seed = ComboSeed(seed, fname, nname);
       try {
         out = model.run_filter(spec, data);
         if (!out.summary.ok) {

@@ -259,7 +259,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   std::cout << std::setprecision(6);
   std::cout << "model         " << model.name << ", measurement " << spec.measurement << ", filter "
-            << FilterKindName(spec.kind) << (spec.iterations > 1 ? " (iterated)" : "")
+            << FilterKindName(spec.kind()) << (spec.iterated() ? " (iterated)" : "")
             << "\ndata          " << n_data << " dataset(s), " << r.updates
             << " innovations after burn-in\nform          " << r.form << ", " << r.starts.size()
             << " start(s), status " << TuneStatusName(r.status) << "\n";
@@ -322,7 +322,7 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   JsonWriter j;
   j.BeginObject().Key("model").Value(model.name).Key("measurement").Value(spec.measurement);
-  j.Key("filter").Value(FilterKindName(spec.kind)).Key("form").Value(r.form);
+  j.Key("filter").Value(FilterKindName(spec.kind())).Key("form").Value(r.form);
   j.Key("status").Value(TuneStatusName(r.status)).Key("message").Value(r.message);
   if (r.IsSolutionUsable()) {
     j.Key("tuned").BeginObject().Key("q");
@@ -451,7 +451,7 @@ int RunTune(const std::vector<std::string>& args) {
   options.log_lower = BoundList(vm, "log-lower");
   options.log_upper = BoundList(vm, "log-upper");
   options.max_iterations = vm["max-iterations"].as<int>();
-  options.seed = spec.seed;
+  options.seed = SeedOf(settings);
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
 
@@ -472,7 +472,7 @@ int RunTune(const std::vector<std::string>& args) {
     validation = Validate(vm, model, spec, result);
   if (result.IsSolutionUsable() && out) {
     out->stream() << "# estlab tune: model " << model.name << ", measurement " << spec.measurement
-                  << ", filter " << FilterKindName(spec.kind) << ", NLL "
+                  << ", filter " << FilterKindName(spec.kind()) << ", NLL "
                   << FormatDouble(result.nll_initial) << " -> " << FormatDouble(result.nll_tuned)
                   << " (" << TuneStatusName(result.status) << ")\n";
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);

@@ -21,6 +21,7 @@
 #define ESTLAB_FILTERS_EKF_H_
 
 #include <exception>
+#include <memory>
 #include <string>
 
 #include "src/filters/ekf_step.h"
@@ -106,6 +107,15 @@ class Ekf final : public FilterCommon<Model, Meas> {
   Params params_;
   EkfOptions options_;
 };
+
+// The filter that FilterSpec::filter = EkfOptions runs (MakeFilter,
+// src/run/filter_run_impl.h, visits the options with this overload).
+template <class Model, class Meas>
+std::unique_ptr<Filter<Model, Meas>> MakeFilterFor(const EkfOptions& options,
+                                                   Transition<Model>* transition,
+                                                   const typename Model::Params& params) {
+  return std::make_unique<Ekf<Model, Meas>>(transition, params, options);
+}
 
 }  // namespace estlab
 

@@ -32,6 +32,16 @@ bool KfOptions::IsValid(std::string* error) const {
   return true;
 }
 
+bool KfOptions::IsValidFor(int n, std::string* error) const {
+  if (!operating_point.empty() && int(operating_point.size()) != n) {
+    if (error != nullptr)
+      *error = "linearize-at: " + std::to_string(operating_point.size()) +
+               " values, the model has " + std::to_string(n) + " states";
+    return false;
+  }
+  return IsValid(error);
+}
+
 ResampleScheme ParseResampleScheme(const std::string& name) {
   if (name == "multinomial") return ResampleScheme::kMultinomial;
   if (name == "systematic") return ResampleScheme::kSystematic;

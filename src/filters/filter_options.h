@@ -1,6 +1,7 @@
 // The options of each filter kind, in one light header (no Eigen templates
-// beyond Core): what FilterSpec maps to (src/run/spec_options.h), what each
-// filter's constructor validates with its IsValid.
+// beyond Core): the alternatives of FilterSpec::filter (src/run/filter_kinds.h),
+// what each filter's constructor validates with its IsValid. IsValidFor(n)
+// adds the checks that need the model's state dimension n.
 #ifndef ESTLAB_FILTERS_FILTER_OPTIONS_H_
 #define ESTLAB_FILTERS_FILTER_OPTIONS_H_
 
@@ -17,6 +18,7 @@ struct EkfOptions {
   int iterations = 1;
 
   bool IsValid(std::string* error) const;
+  bool IsValidFor(int /*n*/, std::string* error) const { return IsValid(error); }
 };
 
 struct KfOptions {
@@ -26,6 +28,8 @@ struct KfOptions {
   double operating_input = 0.0;
 
   bool IsValid(std::string* error) const;
+  // IsValid, and an operating point (when given) of n components.
+  bool IsValidFor(int n, std::string* error) const;
 };
 
 enum class ResampleScheme { kMultinomial, kSystematic, kStratified, kResidual };
@@ -42,6 +46,7 @@ struct ParticleOptions {
   uint64_t seed = 1;
 
   bool IsValid(std::string* error) const;
+  bool IsValidFor(int /*n*/, std::string* error) const { return IsValid(error); }
 };
 
 // Online noise adaptation of the sigma-point filter (noise_adapter.h).

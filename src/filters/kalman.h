@@ -29,6 +29,7 @@
 #define ESTLAB_FILTERS_KALMAN_H_
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
@@ -39,6 +40,7 @@
 #include "src/filters/gaussian_update.h"
 #include "src/filters/kalman_step.h"
 #include "src/filters/linearize.h"
+#include "src/ode/transition.h"
 
 namespace estlab {
 
@@ -181,6 +183,15 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   double cached_dt_ = -1.0;
   KfDiscretization<kN> step_;  // Phi, Gamma, d of cached_dt_
 };
+
+// The filter that FilterSpec::filter = KfOptions runs (MakeFilter,
+// src/run/filter_run_impl.h, visits the options with this overload).
+template <class Model, class Meas>
+std::unique_ptr<Filter<Model, Meas>> MakeFilterFor(const KfOptions& options,
+                                                   Transition<Model>* /*transition*/,
+                                                   const typename Model::Params& params) {
+  return std::make_unique<LinearizedKf<Model, Meas>>(params, options);
+}
 
 }  // namespace estlab
 

@@ -42,6 +42,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -280,6 +281,15 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   double ess_ = 0.0;
   bool resampled_ = false;
 };
+
+// The filter that FilterSpec::filter = ParticleOptions runs (MakeFilter,
+// src/run/filter_run_impl.h, visits the options with this overload).
+template <class Model, class Meas>
+std::unique_ptr<Filter<Model, Meas>> MakeFilterFor(const ParticleOptions& options,
+                                                   Transition<Model>* transition,
+                                                   const typename Model::Params& params) {
+  return std::make_unique<ParticleFilter<Model, Meas>>(transition, params, options);
+}
 
 }  // namespace estlab
 

@@ -25,6 +25,7 @@
 #define ESTLAB_FILTERS_SIGMA_POINT_H_
 
 #include <exception>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -160,6 +161,15 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   MeasurementPoints measurement_points_;
   bool have_propagated_ = false;
 };
+
+// The filter that FilterSpec::filter = SigmaPointOptions runs (MakeFilter,
+// src/run/filter_run_impl.h, visits the options with this overload).
+template <class Model, class Meas>
+std::unique_ptr<Filter<Model, Meas>> MakeFilterFor(const SigmaPointOptions& options,
+                                                   Transition<Model>* transition,
+                                                   const typename Model::Params& params) {
+  return std::make_unique<SigmaPointFilter<Model, Meas>>(transition, params, options);
+}
 
 }  // namespace estlab
 

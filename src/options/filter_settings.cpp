@@ -3,12 +3,13 @@
 #include <cstdint>
 #include <exception>
 #include <string>
+#include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "src/core/parse.h"
 #include "src/options/filter_flags.h"
-#include "src/run/filter_options.h"
 
 namespace estlab {
 
@@ -189,37 +190,97 @@ uint64_t ParseSeed(const std::string& text) {
   }
 }
 
-void ReadFilterKind(const Reader& r, FilterSpec* spec) {
-  const std::string name = r.Text("filter");
-  spec->kind = ForKey("filter", [&] { return ParseFilterKind(name); });
-  spec->iterations = int(r.Integer("iterations", 0));
-  if (name == "iekf" && !r.Given("iterations")) spec->iterations = 3;
-  spec->alpha = r.Number("alpha");
-  spec->beta = r.Number("beta");
-  spec->kappa = r.Number("kappa");
-  spec->gh_order = int(r.Integer("gh-order", 0));
+// An IsValid message "key: what" as the KeyError of that key.
+[[noreturn]] void ThrowKeyed(const std::string& error) {
+  const auto colon = error.find(": ");
+  if (colon == std::string::npos) throw KeyError("filter", error);
+  throw KeyError(error.substr(0, colon), error.substr(colon + 2));
+}
+
+void ReadAdapt(const Reader& r, AdaptSpec* adapt) {
+  if (!r.Given("adapt")) return;
+  adapt->rule = r.Text("adapt");
+  const std::string what = r.Text("adapt-what");
+  if (what != "q" && what != "r" && what != "qr")
+    throw KeyError("adapt-what", "expected q, r or qr, got '" + what + "'");
+  adapt->adapt_q = what.find('q') != std::string::npos;
+  adapt->adapt_r = what.find('r') != std::string::npos;
+  adapt->forgetting = r.Number("forgetting");
+  adapt->window = int(r.Integer("window", 0));
+}
+
+// The options of every kind from the settings. Each is checked with its
+// own IsValid: a bad value of an option the chosen filter does not use is
+// still an error (the user may think it applies).
+struct KindSettings {
+  KfOptions kf;
+  EkfOptions ekf;
+  SigmaPointOptions sigma;
+  ParticleOptions pf;
+};
+
+KindSettings ReadKindSettings(const Reader& r, const std::string& filter_name) {
+  KindSettings k;
+  k.ekf.iterations = int(r.Integer("iterations", 0));
+  if (filter_name == "iekf" && !r.Given("iterations")) k.ekf.iterations = 3;
+  k.sigma.alpha = r.Number("alpha");
+  k.sigma.beta = r.Number("beta");
+  k.sigma.kappa = r.Number("kappa");
+  k.sigma.gh_order = int(r.Integer("gh-order", 0));
   const std::string upd = r.Text("sigma-update");
   if (upd != "propagate" && upd != "redraw")
     throw KeyError("sigma-update", "expected propagate or redraw, got '" + upd + "'");
-  spec->sigma_redraw = upd == "redraw";
-  spec->jitter = r.Number("jitter");
-  if (r.Given("adapt")) {
-    spec->adapt.rule = r.Text("adapt");
-    const std::string what = r.Text("adapt-what");
-    if (what != "q" && what != "r" && what != "qr")
-      throw KeyError("adapt-what", "expected q, r or qr, got '" + what + "'");
-    spec->adapt.adapt_q = what.find('q') != std::string::npos;
-    spec->adapt.adapt_r = what.find('r') != std::string::npos;
-    spec->adapt.forgetting = r.Number("forgetting");
-    spec->adapt.window = int(r.Integer("window", 0));
+  k.sigma.update =
+      upd == "redraw" ? SigmaPointOptions::Update::kRedraw : SigmaPointOptions::Update::kPropagate;
+  k.sigma.jitter = r.Number("jitter");
+  k.pf.num_particles = int(r.Integer("particles", 0));
+  const std::string resample = r.Text("resample");
+  k.pf.resample = ForKey("resample", [&] { return ParseResampleScheme(resample); });
+  k.pf.ess_threshold = r.Number("ess-threshold");
+  k.pf.seed = ForKey("seed", [&] { return ParseSeed(r.Text("seed")); });
+  return k;
+}
+
+// spec->filter from the settings: the chosen kind's options (filter_kinds.h).
+void ReadFilterKind(const Reader& r, const ModelEntry& model, FilterSpec* spec) {
+  const std::string name = r.Text("filter");
+  const FilterKind kind = ForKey("filter", [&] { return ParseFilterKind(name); });
+  KindSettings k = ReadKindSettings(r, name);
+  if (r.Given("linearize-at")) {
+    k.kf.operating_point = ForKey("linearize-at", [&] {
+      return model.ResolveState(r.Assignments("linearize-at"), "linearize-at");
+    });
   }
-  spec->particles = int(r.Integer("particles", 0));
-  spec->resample = r.Text("resample");
-  spec->ess_threshold = r.Number("ess-threshold");
-  spec->seed = ForKey("seed", [&] { return ParseSeed(r.Text("seed")); });
+  k.kf.operating_input = spec->input;
+  // Every kind's values on their own, then the chosen kind in n dimensions.
+  std::string error;
+  if (!k.kf.IsValid(&error) || !k.ekf.IsValid(&error) || !k.sigma.IsValid(&error) ||
+      !k.pf.IsValid(&error))
+    ThrowKeyed(error);
+  spec->filter = DefaultFilterOptions(kind);
+  std::visit(
+      [&](auto& o) {
+        using O = std::decay_t<decltype(o)>;
+        if constexpr (std::is_same_v<O, KfOptions>) o = k.kf;
+        if constexpr (std::is_same_v<O, EkfOptions>) o = k.ekf;
+        if constexpr (std::is_same_v<O, ParticleOptions>) o = k.pf;
+        if constexpr (std::is_same_v<O, SigmaPointOptions>) {
+          const SigmaRule rule = o.rule;  // the kind's
+          o = k.sigma;
+          o.rule = rule;
+        }
+      },
+      spec->filter);
+  const int n = int(model.states.size());
+  if (!std::visit([&](const auto& o) { return o.IsValidFor(n, &error); }, spec->filter))
+    ThrowKeyed(error);
 }
 
 }  // namespace
+
+uint64_t SeedOf(const FilterSettings& settings) {
+  return ForKey("seed", [&] { return ParseSeed(settings.Get("seed")); });
+}
 
 FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& model) {
   const Reader r(settings);
@@ -231,7 +292,6 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   });
   const int m = int(meas.outputs.size());
   spec.params = ForKey("param", [&] { return model.ResolveParams(r.Assignments("param")); });
-  ReadFilterKind(r, &spec);
   ReadTransition(r, &spec.transition);
   if (r.Given("t0")) {
     spec.has_t0 = true;
@@ -247,22 +307,15 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   const std::string p0_key = r.Given("p0") ? "p0" : "p0-diag";
   ForKey(p0_key, [&] { return cli::CheckCovariance(spec.p0, n, "P0", false), 0; });
   ReadNoise(r, settings.noise_prefix(), n, m, meas.name, &spec);
-  if (r.Given("linearize-at")) {
-    spec.linearize_at = ForKey("linearize-at", [&] {
-      return model.ResolveState(r.Assignments("linearize-at"), "linearize-at");
-    });
-  }
   spec.input = r.Number("input");
   if (spec.input != 0 && !model.has_input)
     throw KeyError("input", "model '" + model.name + "' has no input");
   spec.full_cov = r.Given("full-cov");
-  // The filter's own check of its options: messages start with the key.
+  ReadFilterKind(r, model, &spec);
+  ReadAdapt(r, &spec.adapt);
+  // The rest of the spec (transition, adaptation): messages start with the key.
   std::string error;
-  if (!AllFilterOptionsValid(spec, n, &error)) {
-    const auto colon = error.find(": ");
-    if (colon == std::string::npos) throw KeyError("filter", error);
-    throw KeyError(error.substr(0, colon), error.substr(colon + 2));
-  }
+  if (!IsValidFilterOptions(spec, n, &error)) ThrowKeyed(error);
   return spec;
 }
 

@@ -20,6 +20,7 @@
 #ifndef ESTLAB_OPTIONS_FILTER_SETTINGS_H_
 #define ESTLAB_OPTIONS_FILTER_SETTINGS_H_
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -85,6 +86,9 @@ class FilterSettings {
 // Parses and checks the settings (the filter's own IsValid: filter_options.h
 // of src/run); throws KeyError naming the key.
 FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& model);
+// The "seed" key: a non-negative 64-bit integer (the particle filter's and
+// the tuner's random draws); throws KeyError.
+uint64_t SeedOf(const FilterSettings& settings);
 
 }  // namespace estlab
 

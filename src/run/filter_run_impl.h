@@ -21,12 +21,8 @@
 
 #include "models/model_traits.h"
 #include "src/core/white_accel.h"
-#include "src/filters/ekf.h"
-#include "src/filters/kalman.h"
+#include "src/filters/filters.h"
 #include "src/filters/noise_adapter.h"
-#include "src/filters/particle.h"
-#include "src/filters/sigma_point.h"
-#include "src/run/filter_options.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"
 
@@ -47,27 +43,16 @@ Mat<R, C> MatFromVector(const std::vector<double>& v) {
   return A;
 }
 
-// The filter of spec.kind (options from spec: filter_options.h). Throws
-// InputError for invalid options. Adding a filter kind: its case here.
+// The filter of spec.filter: each options struct's MakeFilterFor overload
+// (src/filters/filters.h); a kind without one does not compile. Throws
+// InputError for invalid options.
 template <class Model, class Meas>
 std::unique_ptr<Filter<Model, Meas>> MakeFilter(const FilterSpec& spec,
                                                 const typename Model::Params& params,
                                                 Transition<Model>* transition) {
-  switch (spec.kind) {
-    case FilterKind::kKf:
-      return std::make_unique<LinearizedKf<Model, Meas>>(params, KfOptionsOf(spec));
-    case FilterKind::kEkf:
-      return std::make_unique<Ekf<Model, Meas>>(transition, params, EkfOptionsOf(spec));
-    case FilterKind::kUkf:
-    case FilterKind::kCkf:
-    case FilterKind::kGhkf:
-      return std::make_unique<SigmaPointFilter<Model, Meas>>(transition, params,
-                                                             SigmaPointOptionsOf(spec));
-    case FilterKind::kPf:
-      return std::make_unique<ParticleFilter<Model, Meas>>(transition, params,
-                                                           ParticleOptionsOf(spec));
-  }
-  throw InputError("unknown filter kind");
+  return std::visit(
+      [&](const auto& options) { return MakeFilterFor<Model, Meas>(options, transition, params); },
+      spec.filter);
 }
 
 template <class Model, class Meas>

@@ -9,20 +9,21 @@
 
 #include "src/filters/filter_options.h"
 #include "src/ode/transition.h"
+#include "src/run/filter_kinds.h"
 
 namespace estlab {
-
-enum class FilterKind { kKf, kEkf, kUkf, kCkf, kGhkf, kPf };
-// Parses kf | ekf | iekf | ukf | ckf | ghkf | pf (iekf = ekf with iterations);
-// throws InputError.
-FilterKind ParseFilterKind(const std::string& name);
-const char* FilterKindName(FilterKind kind);
 
 struct FilterSpec {
   std::vector<double> params;  // model parameters in registry order
   std::string measurement;
-  FilterKind kind = FilterKind::kUkf;
   TransitionOptions transition;
+  // The filter kind and its options (filter_kinds.h); default: the UKF.
+  FilterKindOptions filter = SigmaPointOptions{};
+  FilterKind kind() const { return KindOf(filter); }
+  bool iterated() const {
+    const auto* ekf = std::get_if<EkfOptions>(&filter);
+    return ekf != nullptr && ekf->iterations > 1;
+  }
 
   std::vector<double> x0;  // n
   std::vector<double> p0;  // n x n, row-major
@@ -34,21 +35,7 @@ struct FilterSpec {
   std::vector<double> q;  // n x n, row-major
   std::vector<double> r;  // m x m, row-major
 
-  // KF: operating point (empty = prior mean), EKF: iterations (> 1 = IEKF).
-  std::vector<double> linearize_at;
-  int iterations = 1;
-  // Sigma-point rules.
-  double alpha = 1e-3, beta = 2.0, kappa = 0.0;
-  int gh_order = 3;
-  bool sigma_redraw = true;  // --sigma-update redraw (default) | propagate
-  double jitter = 0.0;
-  // Particle filter.
-  int particles = 1000;
-  std::string resample = "systematic";
-  double ess_threshold = 0.5;
-  uint64_t seed = 1;
-
-  AdaptSpec adapt;
+  AdaptSpec adapt;  // sigma-point filters only
 
   double input = 0.0;  // constant input when the data has no 'u' column
   bool has_t0 = false;
@@ -96,6 +83,12 @@ struct FilterRunOutput {
   std::vector<std::vector<double>> rows;
   FilterSummary summary;
 };
+
+// The IsValid of spec.filter's options for a model with `state_dim` states
+// (IsValidFor), of the transition options and of the noise adaptation
+// (sigma-point filters only), with *error set when false. Every message
+// starts with the option key it is about ("alpha: must be > 0 ...").
+bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* error);
 
 // Two-sided 95 % bounds of the K-step time average of a d-dimensional
 // chi-square statistic: K * mean ~ chi2(K d).

@@ -94,10 +94,13 @@ FilterSpec Spec(const ModelEntry& model, const MeasurementDesc& meas, const Kind
   FilterSpec spec;
   spec.params = model.ResolveParams({});
   spec.measurement = meas.name;
-  spec.kind = kind.kind;
-  spec.iterations = kind.iterations;
-  spec.sigma_redraw = kind.redraw;
-  spec.alpha = 0.5;
+  spec.filter = DefaultFilterOptions(kind.kind);
+  if (auto* ekf = std::get_if<EkfOptions>(&spec.filter)) ekf->iterations = kind.iterations;
+  if (auto* sigma = std::get_if<SigmaPointOptions>(&spec.filter)) {
+    sigma->update =
+        kind.redraw ? SigmaPointOptions::Update::kRedraw : SigmaPointOptions::Update::kPropagate;
+    sigma->alpha = 0.5;
+  }
   spec.transition = Transition(model);
   spec.x0.assign(n, 0.15);
   spec.p0 = Diagonal(n, 0.05);

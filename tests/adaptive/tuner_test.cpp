@@ -164,7 +164,7 @@ std::vector<double> Flat(const Mat<R, C>& A) {
 FilterSpec CvSpec(double qc0, double r0) {
   FilterSpec spec;
   spec.measurement = "positions";
-  spec.kind = FilterKind::kEkf;
+  spec.filter = EkfOptions{};
   spec.transition.integrator = Integrator::kEuler;
   spec.x0 = {0.0, 1.0};
   spec.p0 = {1.0, 0.0, 0.0, 1.0};
@@ -283,7 +283,7 @@ FilterSpec PendulumSpec(FilterKind kind, double qc0, double r0, double dt) {
   FilterSpec spec;
   spec.params = {9.81, 1.0, 0.0};
   spec.measurement = "sin";
-  spec.kind = kind;
+  spec.filter = DefaultFilterOptions(kind);
   spec.transition.integrator = Integrator::kEuler;
   spec.x0 = {kPi / 4, 0.0};
   spec.p0 = {0.01, 0.0, 0.0, 0.01};
@@ -391,23 +391,21 @@ TEST(TunerGradient, JetGradientMatchesCentralDifferences) {
     CheckGradient(ekf, 41, "ekf");
   }
   {
-    spec.iterations = 3;
+    spec.filter = EkfOptions{.iterations = 3};
     const InnovationLikelihood<P, P::Sin> iekf(spec, options, data);
     CheckGradient(iekf, 42, "iekf");
-    spec.iterations = 1;
   }
   // alpha = 0.5: with the default 1e-3 the unscented weights are ~ -1e6 and
   // the double NLL itself carries rounding noise of ~1e-9 relative, so its
   // central differences scatter by ~1e-3 between steps h = 1e-2 .. 1e-6 and
   // cannot check anything to 1e-6 (the AD gradient at alpha = 1e-3 equals the
   // one at alpha = 1e-2 to 3e-8).
-  spec.kind = FilterKind::kUkf;
-  spec.alpha = 0.5;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 0.5};
   {
     const InnovationLikelihood<P, P::Sin> ukf(spec, options, data);
     CheckGradient(ukf, 43, "ukf");
   }
-  spec.kind = FilterKind::kCkf;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kCubature, .alpha = 0.5};
   {
     const InnovationLikelihood<P, P::Sin> ckf(spec, options, data);
     CheckGradient(ckf, 44, "ckf");
@@ -423,8 +421,7 @@ TEST(TunerGradient, ChunkedGradientWithMoreThanEightParameters) {
       Integrator::kEuler, Vec<double, 4>(0, 1, 0, -1), dt, 300, WhiteAccel<Cv2>(1.0, dt), R, 51)};
   FilterSpec spec;
   spec.measurement = "positions";
-  spec.kind = FilterKind::kUkf;
-  spec.alpha = 0.5;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 0.5};
   spec.transition.integrator = Integrator::kEuler;
   spec.x0 = {0, 1, 0, -1};
   spec.p0 = Flat<4, 4>(Mat<4, 4>::Identity());
@@ -456,9 +453,12 @@ TEST(TunerLikelihood, AgreesWithTheDoubleFilters) {
     for (bool redraw : {true, false}) {
       FilterSpec spec = PendulumSpec(ParseFilterKind(filter), 0.3, 0.02, dt);
       spec.transition.integrator = Integrator::kRk4;
-      spec.iterations = std::string(filter) == "iekf" ? 3 : 1;
-      spec.sigma_redraw = redraw;
-      spec.jitter = redraw ? 0.0 : 1e-6;
+      if (std::string(filter) == "iekf") spec.filter = EkfOptions{.iterations = 3};
+      if (auto* sigma = std::get_if<SigmaPointOptions>(&spec.filter)) {
+        sigma->update =
+            redraw ? SigmaPointOptions::Update::kRedraw : SigmaPointOptions::Update::kPropagate;
+        sigma->jitter = redraw ? 0.0 : 1e-6;
+      }
       const InnovationLikelihood<P, P::Sin> lik(spec, options, data);
       double nll = 0.0;
       ASSERT_TRUE(lik.Nll(lik.InitialTheta().data(), &nll));
@@ -532,11 +532,10 @@ TEST(TunerInput, RejectsBadInput) {
   }
   {  // unsupported filter; a KF operating point of the wrong length
     FilterSpec s = spec;
-    s.kind = FilterKind::kPf;
+    s.filter = ParticleOptions{};
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
     s = spec;
-    s.kind = FilterKind::kKf;
-    s.linearize_at = {0.0, 0.0, 0.0};
+    s.filter = KfOptions{.operating_point = {0.0, 0.0, 0.0}};
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
   }
   {  // through the registry: unknown measurement
@@ -593,8 +592,7 @@ TEST(TunerDoublePendulum, ConvergesFromGuessesFarAboveAndBelow) {
   FilterSpec spec;
   spec.params = sim.params;
   spec.measurement = "full";
-  spec.kind = FilterKind::kUkf;
-  spec.alpha = 1.0;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 1.0};
   spec.transition.integrator = Integrator::kRk4;
   spec.x0 = sim.x0;
   spec.p0 = Flat<4, 4>(1e-4 * Mat<4, 4>::Identity());
@@ -643,8 +641,7 @@ TEST(TunerKf, NllEqualsTheDoubleKfAndTheGradientIsExact) {
   FilterSpec spec;
   spec.params = model.ResolveParams({});
   spec.measurement = "angle";
-  spec.kind = FilterKind::kKf;
-  spec.linearize_at = {0.0, 0.0};
+  spec.filter = KfOptions{.operating_point = {0.0, 0.0}};
   spec.x0 = {0.2, 0.0};
   spec.p0 = {0.01, 0.0, 0.0, 0.01};
   spec.q = Flat<2, 2>(WhiteAccel<P>(0.05, dt) + 1e-6 * Mat<2, 2>::Identity());
@@ -670,7 +667,7 @@ TEST(TunerKf, EqualsTheEkfOnALinearModel) {
   options.q_param = NoiseParam::kWhiteAccel;
   FilterSpec spec = CvSpec(0.3, 1.5);
   const TuneResult ekf = TuneCv(spec, options, data);
-  spec.kind = FilterKind::kKf;
+  spec.filter = KfOptions{};
   const TuneResult kf = TuneCv(spec, options, data);
   ASSERT_TRUE(ekf.IsSolutionUsable() && kf.IsSolutionUsable()) << kf.message;
   std::printf("  ekf: qc %.6f R %.6f NLL %.9f   kf: qc %.6f R %.6f NLL %.9f\n", ekf.qc, ekf.r[0],
@@ -696,7 +693,7 @@ TEST(TunerCvodes, CentralDifferencesAgreeWithTheExactFlowGradientAndTune) {
   options.q_param = NoiseParam::kWhiteAccel;
   for (FilterKind kind : {FilterKind::kEkf, FilterKind::kUkf}) {
     FilterSpec spec = PendulumSpec(kind, 0.1, 0.05, dt);
-    spec.alpha = 0.5;
+    if (auto* sigma = std::get_if<SigmaPointOptions>(&spec.filter)) sigma->alpha = 0.5;
     spec.transition.integrator = Integrator::kRk4;
     spec.transition.substeps = 50;
     const InnovationLikelihood<P, P::Sin> fine(spec, options, data);
@@ -780,8 +777,7 @@ TEST(TunerDoublePendulum, TunedRmseOnHeldOutRunsIsNearTheOracleAndBeatsTheHandGr
   FilterSpec spec;
   spec.params = model.ResolveParams({});
   spec.measurement = "full";
-  spec.kind = FilterKind::kUkf;
-  spec.alpha = 1.0;
+  spec.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 1.0};
   spec.transition.integrator = Integrator::kRk4;
   spec.x0 = {kPi / 4, 0.0, kPi / 6, 0.0};
   spec.p0 = Flat<4, 4>(1e-4 * Mat<4, 4>::Identity());

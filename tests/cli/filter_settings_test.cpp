@@ -50,17 +50,19 @@ TEST(FilterSettings, CommandLineAndDirectSettingsGiveTheSameSpec) {
   s.Set("gh-order", "5");
   s.Add("x0", "theta=0.3");
   const FilterSpec direct = BuildFilterSpec(s, FindModel("pendulum"));
-  EXPECT_EQ(from_cli.kind, FilterKind::kGhkf);
-  EXPECT_EQ(direct.kind, from_cli.kind);
-  EXPECT_EQ(direct.gh_order, 5);
-  EXPECT_EQ(direct.gh_order, from_cli.gh_order);
+  EXPECT_EQ(from_cli.kind(), FilterKind::kGhkf);
+  EXPECT_EQ(direct.kind(), from_cli.kind());
+  const auto& sigma = std::get<SigmaPointOptions>(direct.filter);
+  EXPECT_EQ(sigma.rule, SigmaRule::kGaussHermite);
+  EXPECT_EQ(sigma.gh_order, 5);
+  EXPECT_EQ(sigma.gh_order, std::get<SigmaPointOptions>(from_cli.filter).gh_order);
   EXPECT_EQ(direct.x0, from_cli.x0);
   EXPECT_EQ(direct.x0[0], 0.3);
   EXPECT_EQ(direct.q, from_cli.q);
   EXPECT_EQ(direct.r, from_cli.r);
   // Defaults are the table's: alpha 1e-3, redraw, rk4 with one substep.
-  EXPECT_EQ(direct.alpha, 1e-3);
-  EXPECT_TRUE(direct.sigma_redraw);
+  EXPECT_EQ(sigma.alpha, 1e-3);
+  EXPECT_EQ(sigma.update, SigmaPointOptions::Update::kRedraw);
   EXPECT_EQ(direct.transition.integrator, Integrator::kRk4);
   EXPECT_EQ(direct.transition.substeps, 1);
 }
@@ -68,9 +70,12 @@ TEST(FilterSettings, CommandLineAndDirectSettingsGiveTheSameSpec) {
 TEST(FilterSettings, IekfDefaultsToThreeIterations) {
   FilterSettings s = Pendulum();
   s.Set("filter", "iekf");
-  EXPECT_EQ(BuildFilterSpec(s, FindModel("pendulum")).iterations, 3);
+  auto iterations = [&] {
+    return std::get<EkfOptions>(BuildFilterSpec(s, FindModel("pendulum")).filter).iterations;
+  };
+  EXPECT_EQ(iterations(), 3);
   s.Set("iterations", "5");
-  EXPECT_EQ(BuildFilterSpec(s, FindModel("pendulum")).iterations, 5);
+  EXPECT_EQ(iterations(), 5);
 }
 
 TEST(FilterSettings, ErrorsNameTheKey) {

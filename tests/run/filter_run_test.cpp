@@ -52,14 +52,13 @@ FilterSpec PendulumSpec(double qc, double r, double theta0) {
   FilterSpec s;
   s.params = model.ResolveParams({});
   s.measurement = "sin";
-  s.kind = FilterKind::kUkf;
   s.transition.integrator = Integrator::kEuler;
   s.x0 = {theta0, 0.0};
   s.p0 = {0.01, 0, 0, 0.01};
   s.q_white_accel = true;
   s.qc = qc;
   s.r = {r};
-  s.alpha = 1e-3;
+  s.filter = SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 1e-3};
   return s;
 }
 
@@ -77,9 +76,8 @@ TEST(FilterRun, UkfNisConsistentOverMonteCarloRuns) {
   double grand = 0.0;
   long count = 0;
   for (int run = 0; run < runs; ++run) {
-    const FilterData d =
-        SimulatePendulumSin(DeriveSeed({11, uint64_t(run)}), steps, dt, qc,
-                            std::vector<double>(steps + 1, r), theta0);
+    const FilterData d = SimulatePendulumSin(DeriveSeed({11, uint64_t(run)}), steps, dt, qc,
+                                             std::vector<double>(steps + 1, r), theta0);
     FilterSpec spec = PendulumSpec(qc, r, theta0);
     spec.p0 = {1e-12, 0, 0, 1e-12};  // the truth starts exactly at x0
     const FilterRunOutput out = model.run_filter(spec, d);
@@ -107,8 +105,9 @@ TEST(FilterRun, UkfNisConsistentOverMonteCarloRuns) {
   ChiSquareBounds95(count, 1, grand_bounds);
   EXPECT_GE(grand / count, grand_bounds[0]);
   EXPECT_LE(grand / count, grand_bounds[1]);
-  std::printf("[ measured ] NIS inside 95%% bounds at %.3f of steps; grand mean %.4f in [%.4f, %.4f]\n",
-              fraction, grand / count, grand_bounds[0], grand_bounds[1]);
+  std::printf(
+      "[ measured ] NIS inside 95%% bounds at %.3f of steps; grand mean %.4f in [%.4f, %.4f]\n",
+      fraction, grand / count, grand_bounds[0], grand_bounds[1]);
 }
 
 // Issue 3, done-when 5: the measurement variance steps from 0.01 to 0.1
@@ -167,9 +166,10 @@ TEST(FilterRun, AdaptiveUkfTracksMeasurementNoiseStep) {
   // Before the step both are consistent.
   const double before = MeanNis(adapt_out, half - 499, half + 1);
   EXPECT_TRUE(before >= b[0] && before <= b[1]) << before;
-  std::printf("[ measured ] R^ one window after the step %.4f (true 0.1); mean NIS last 500: "
-              "adaptive %.3f, fixed %.3f, bounds [%.3f, %.3f]\n",
-              r_hat, nis_adapt, nis_fixed, b[0], b[1]);
+  std::printf(
+      "[ measured ] R^ one window after the step %.4f (true 0.1); mean NIS last 500: "
+      "adaptive %.3f, fixed %.3f, bounds [%.3f, %.3f]\n",
+      r_hat, nis_adapt, nis_fixed, b[0], b[1]);
 
   // Sage-Husa on R also brings NIS back inside.
   FilterSpec sage = adaptive;

@@ -56,7 +56,7 @@ TEST(StudyConfig, ParsesTheTinyStudy) {
   EXPECT_EQ(hand.p0, (std::vector<double>{0.05, 0, 0, 0.05}));
   EXPECT_DOUBLE_EQ(hand.x0[0], 0.7853981633974483);
   EXPECT_EQ(c.filters[2].kind, "pf");
-  EXPECT_EQ(s.combos[4].spec.particles, 100);
+  EXPECT_EQ(std::get<ParticleOptions>(s.combos[4].spec.filter).num_particles, 100);
   EXPECT_EQ(c.claims.size(), 1u);
   EXPECT_EQ(c.references.size(), 1u);
 }
@@ -167,7 +167,7 @@ TEST(StudyConfig, WhiteAccelPairsMatchEveryModel) {
     FilterSpec spec;
     spec.params = model->ResolveParams({});
     spec.measurement = meas.name;
-    spec.kind = FilterKind::kEkf;
+    spec.filter = EkfOptions{};
     spec.transition.integrator = Integrator::kRk4;
     spec.x0.assign(n, 0.1);
     spec.p0.assign(n * n, 0.0);
