@@ -627,4 +627,13 @@ TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
 
 }  // namespace estlab
 
+// The entry point of a model's tuner library compiled at run time
+// (src/registry/model_plugin.cpp): the address of TuneModel<Model>.
+#define ESTLAB_DEFINE_TUNER_PLUGIN(Model)                     \
+  extern "C" estlab::TuneResult (*estlab_model_tuner_v1())(   \
+      const estlab::FilterSpec&, const estlab::TunerOptions&, \
+      const std::vector<estlab::FilterData>&) {               \
+    return &estlab::TuneModel<Model>;                         \
+  }
+
 #endif  // ESTLAB_ADAPTIVE_TUNER_IMPL_H_

@@ -5,6 +5,7 @@
 #include <set>
 #include <sstream>
 
+#include "src/core/hash.h"
 #include "src/core/parse.h"
 #include "src/core/types.h"
 #include "src/io/output_file.h"
@@ -12,14 +13,7 @@
 
 namespace estlab {
 
-uint64_t ConfigHash(const std::string& text) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
+uint64_t ConfigHash(const std::string& text) { return Fnv1a64(text); }
 
 namespace study_config {
 

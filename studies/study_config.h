@@ -136,7 +136,8 @@ struct ScenarioConfig {
   std::string section;                                       // "scenario.pend"
   std::vector<std::pair<std::string, std::string>> choices;  // varied key -> label
   const ModelEntry* model = nullptr;
-  SimulationSpec truth;  // seed and (with truth-x0 = sample) x0 set per run
+  std::string model_source;  // the model's name or file path (relative to the working folder)
+  SimulationSpec truth;      // seed and (with truth-x0 = sample) x0 set per run
   bool sample_x0 = false;
   int steps = 0;
   bool measure_at_t0 = false;

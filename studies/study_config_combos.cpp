@@ -145,6 +145,8 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   spec.t0 = 0.0;
   if (q_tuned || r_tuned) {
     combo.tune = true;
+    // A model file compiles its tuner now, on first use (the same entry).
+    if (model.tune == nullptr) FindModel(sc.model_source, {.tuner = true});
     TunerOptions& t = combo.tuner;
     auto param = [&](bool tuned, const std::string& which, const std::string& shape) {
       if (!tuned) {

@@ -1,12 +1,15 @@
 // The [scenario.NAME] sections: the truth (model, simulation, noise), the
 // prior, and the '|' alternatives (study_config_parts.h).
 #include <Eigen/Core>
+
 #include <cmath>
+#include <filesystem>
 #include <set>
 
 #include "src/core/parse.h"
 #include "src/core/white_accel.h"
 #include "src/options/filter_flags.h"
+#include "src/registry/model_plugin.h"
 #include "studies/study_config_parts.h"
 
 namespace estlab {
@@ -23,6 +26,8 @@ std::vector<double> WhiteAccelCovariance(const ModelEntry& model, double qc, dou
 
 namespace study_config {
 
+namespace fs = std::filesystem;
+
 ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   ScenarioConfig sc;
   sc.section = v.section().full;
@@ -31,7 +36,12 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     return v.Has(key) ? v.Get(key)->text : fallback;
   };
   if (!v.Has("model")) v.FailSection("'model' is required (see 'estlab list')");
-  sc.model = Checked(*get("model"), err, [](const std::string& t) { return &FindModel(t); });
+  // A model file's path is relative to the config file.
+  sc.model_source = get("model")->text;
+  if (IsModelPath(sc.model_source) && !fs::path(sc.model_source).is_absolute())
+    sc.model_source = (fs::path(err.path()).parent_path() / sc.model_source).string();
+  sc.model =
+      Checked(*get("model"), err, [&](const std::string&) { return &FindModel(sc.model_source); });
   const ModelEntry& model = *sc.model;
   const int n = int(model.states.size());
   SimulationSpec& truth = sc.truth;

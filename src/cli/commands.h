@@ -3,8 +3,12 @@
 #ifndef ESTLAB_CLI_COMMANDS_H_
 #define ESTLAB_CLI_COMMANDS_H_
 
+#include <ostream>
 #include <string>
 #include <vector>
+
+#include "src/io/json.h"
+#include "src/registry/registry.h"
 
 namespace estlab::cli {
 
@@ -15,7 +19,11 @@ int RunStudyCommand(const std::vector<std::string>& args);
 int RunMerge(const std::vector<std::string>& args);
 int RunFigures(const std::vector<std::string>& args);
 int RunTune(const std::vector<std::string>& args);
+int RunModel(const std::vector<std::string>& args);
 
+// A model's description as `estlab list` prints it (list_cmd.cpp).
+void PrintModel(const ModelEntry& model, std::ostream& out);
+void ModelJson(const ModelEntry& model, JsonWriter* json);
 
 }  // namespace estlab::cli
 

@@ -10,6 +10,7 @@
 #include "estlab_version.h"
 #include "src/cli/commands.h"
 #include "src/core/types.h"
+#include "src/registry/model_plugin.h"
 
 namespace {
 
@@ -31,6 +32,7 @@ const std::vector<Command>& Commands() {
       {"merge", "join the result folders of a sharded study", estlab::cli::RunMerge},
       {"figures", "draw a study's figures with gnuplot", estlab::cli::RunFigures},
       {"list", "list models, measurements, parameters and integrators", estlab::cli::RunList},
+      {"model", "check, build or show a model file (.model or C++ header)", estlab::cli::RunModel},
   };
   return commands;
 }
@@ -41,17 +43,31 @@ void PrintUsage(std::ostream& out) {
   for (const auto& c : Commands()) {
     out << "  " << c.name << std::string(12 - std::strlen(c.name), ' ') << c.summary << "\n";
   }
-  out << "\nOptions:\n  --help       this text\n  --version    version and git commit\n\n"
+  out << "\nOptions:\n  --help       this text\n  --version    version and git commit\n"
+      << "  --model-cache DIR   where model files are compiled to (else $ESTLAB_MODEL_CACHE,\n"
+      << "               $XDG_CACHE_HOME/estlab or ~/.cache/estlab)\n\n"
       << "Examples:\n"
       << "  estlab list\n"
       << "  estlab simulate --model double-pendulum --x0 theta1=0.785398,theta2=0.523599 \\\n"
-      << "      --t-end 10 --dt 0.01 --measure angles --meas-noise-var 0.0025,0.0016 --out traj.csv\n";
+      << "      --t-end 10 --dt 0.01 --measure angles --meas-noise-var 0.0025,0.0016 --out "
+         "traj.csv\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
+  // --model-cache DIR (anywhere): where model files' libraries are cached.
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] != "--model-cache") continue;
+    if (i + 1 >= args.size()) {
+      std::cerr << "estlab: error: --model-cache needs a folder\n";
+      return 2;
+    }
+    estlab::SetModelCacheDir(args[i + 1]);
+    args.erase(args.begin() + long(i), args.begin() + long(i) + 2);
+    break;
+  }
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     PrintUsage(std::cout);
     return args.empty() ? 2 : 0;

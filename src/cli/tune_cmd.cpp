@@ -423,7 +423,7 @@ int RunTune(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required (one or more training files)");
-  const ModelEntry& model = FindModel(vm["model"].as<std::string>());
+  const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = true});
   if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
   const MeasurementDesc& meas = model.FindMeasurement(vm["measure"].as<std::string>());

@@ -14,7 +14,9 @@
 
 namespace estlab {
 
-template <DynamicModel Model>
+// kWithTuner = false leaves `tune` null: a model library compiled at run
+// time (model_plugin.cpp) compiles its tuner separately, on first use.
+template <DynamicModel Model, bool kWithTuner = true>
 requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   ModelEntry e;
   e.name = Model::kName;
@@ -42,7 +44,7 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   e.stiff = Model::kStiff;
   for (const auto& pair : Model::kPositionRatePairs) e.position_rate_pairs.push_back(pair);
   e.simulate = &Simulate<Model>;
-  e.tune = &TuneModel<Model>;  // instantiated in adaptive/tune_<model>.cpp
+  if constexpr (kWithTuner) e.tune = &TuneModel<Model>;  // generated tune/tune_<model>.cpp
   e.run_filter = &RunFilter<Model>;
   return e;
 }
@@ -57,6 +59,13 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
     static const ModelEntry entry = MakeModelEntry<Model>();                         \
     return entry;                                                                    \
   }                                                                                  \
+  }
+
+// The entry point of a model library compiled at run time (model_plugin.cpp).
+#define ESTLAB_DEFINE_MODEL_PLUGIN(Model)                                           \
+  extern "C" const estlab::ModelEntry* estlab_model_entry_v1() {                    \
+    static const estlab::ModelEntry entry = estlab::MakeModelEntry<Model, false>(); \
+    return &entry;                                                                  \
   }
 
 #endif  // ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "src/registry/model_plugin.h"
+
 namespace estlab {
 
 // The entries of the model list (models/model_list.cmake), each defined in
@@ -27,13 +29,17 @@ std::string Join(const std::vector<std::string>& items) {
 }
 }  // namespace
 
-const ModelEntry& FindModel(const std::string& name) {
+const ModelEntry& FindModel(const std::string& name, ModelNeeds needs) {
   std::vector<std::string> names;
   for (const ModelEntry* m : AllModels()) {
     if (m->name == name) return *m;
     names.push_back(m->name);
   }
-  throw InputError("unknown model '" + name + "' (known: " + Join(names) + ")");
+  if (const std::string path = ResolveModelPath(name); !path.empty())
+    return LoadModelFile(path, needs);
+  if (IsModelPath(name)) throw InputError("model file '" + name + "' not found");
+  throw InputError("unknown model '" + name + "' (known: " + Join(names) +
+                   "; or a .model / .h file, see docs/models.md)");
 }
 
 std::vector<double> ModelEntry::ResolveParams(

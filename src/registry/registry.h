@@ -4,6 +4,7 @@
 //
 // Usage:
 //   const ModelEntry& m = FindModel("double-pendulum");   // throws InputError
+//   const ModelEntry& f = FindModel("examples/models/pendulum.model", {.tuner = true});
 //   std::vector<double> p = m.ResolveParams({{"L1", 2.0}});
 //
 // Adding a model: one header in models/ (satisfying DynamicModel,
@@ -69,8 +70,17 @@ struct ModelEntry {
   int StateIndex(const std::string& name) const;  // -1 when unknown
 };
 
+// The built-in models (models/model_list.cmake).
 const std::vector<const ModelEntry*>& AllModels();
-const ModelEntry& FindModel(const std::string& name);
+
+// What a command needs of a model compiled from a file (model_plugin.h).
+struct ModelNeeds {
+  bool tuner = false;  // the Q/R tuner as well (compiled on its first use)
+};
+// A built-in model by name, or a model file: a path to a .model or .h file,
+// or a name found on ESTLAB_MODEL_PATH (compiled on first use, cached).
+// Throws InputError naming the known models.
+const ModelEntry& FindModel(const std::string& name, ModelNeeds needs = {});
 
 }  // namespace estlab
 

@@ -1,0 +1,229 @@
+// Models from files, end to end through the estlab binary: the built-in
+// pendulum and double pendulum re-written as .model files give the built-ins'
+// numbers; a C++ header compiles, loads and filters; the cache compiles once,
+// rebuilds an edited model, survives two concurrent first uses and keeps
+// nothing of a failed compile. Label "plugin": these compile models (minutes
+// on two cores), so the sanitizer run (-L unit) leaves them out.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/cli_test_util.h"
+
+namespace estlab::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One cache for the whole program, in the build tree: the models compile
+// once per build of estlab.
+std::string Cache() { return (fs::path(ESTLAB_BINARY).parent_path() / "test-model-cache").string(); }
+std::string Example(const std::string& name) {
+  return std::string(ESTLAB_SOURCE_DIR) + "/examples/models/" + name;
+}
+RunResult Est(const std::string& args, const std::string& cwd, const std::string& cache = Cache()) {
+  return RunEstlab("--model-cache '" + cache + "' " + args, cwd);
+}
+
+std::vector<std::vector<double>> Numbers(const std::string& csv, std::string* header) {
+  std::vector<std::vector<double>> rows;
+  const auto lines = SplitLines(csv);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (i == 0) {
+      *header = lines[0];
+      continue;
+    }
+    std::vector<double> row;
+    std::stringstream cells(lines[i]);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) row.push_back(std::strtod(cell.c_str(), nullptr));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Same header, same shape, every number within rel * max(1, |a|).
+void ExpectSameCsv(const std::string& a_path, const std::string& b_path, double rel) {
+  std::string ha, hb;
+  const auto a = Numbers(ReadFile(a_path), &ha), b = Numbers(ReadFile(b_path), &hb);
+  ASSERT_EQ(ha, hb);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].size(), b[i].size()) << "row " << i;
+    for (size_t j = 0; j < a[i].size(); ++j) {
+      if (std::isnan(a[i][j]) && std::isnan(b[i][j])) continue;
+      worst = std::max(worst, std::abs(a[i][j] - b[i][j]) / std::max(1.0, std::abs(a[i][j])));
+    }
+  }
+  EXPECT_LE(worst, rel) << a_path << " vs " << b_path;
+  std::printf("  %s: worst relative difference %.3g over %zu rows\n",
+              fs::path(b_path).filename().c_str(), worst, a.size());
+}
+
+std::vector<double> JsonArray(const std::string& json, const std::string& key) {
+  const std::regex re("\"" + key + "\": \\[([^\\]]*)\\]");
+  std::smatch m;
+  std::vector<double> out;
+  if (!std::regex_search(json, m, re)) return out;
+  std::stringstream items(m[1].str());
+  std::string item;
+  while (std::getline(items, item, ',')) out.push_back(std::strtod(item.c_str(), nullptr));
+  return out;
+}
+
+const char* kPendulumSim =
+    " --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 --measure sin "
+    "--meas-noise-var 0.1 --process-noise-var 1e-6,1e-4 --seed 3";
+const char* kPendulumFilter =
+    " --param g=9.8 --measure sin --data d.csv --integrator rk4 --x0 theta=0.785398 "
+    "--p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 --seed 5";
+
+TEST(ModelFile, PendulumFileGivesTheBuiltInsNumbers) {
+  TempDir dir;
+  const std::string file = Example("pendulum.model");
+  ASSERT_EQ(Est(std::string("simulate --model pendulum") + kPendulumSim + " --out d.csv",
+                dir.path()).exit_code, 0);
+  const RunResult first =
+      Est("simulate --model '" + file + "'" + kPendulumSim + " --out f.csv", dir.path());
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  ExpectSameCsv(dir.File("d.csv"), dir.File("f.csv"), 1e-12);  // CVODES
+  for (const char* filter : {"ekf", "ukf", "pf"}) {
+    const std::string tail = std::string(kPendulumFilter) + " --filter " + filter;
+    ASSERT_EQ(Est("filter --model pendulum" + tail + " --out b.csv", dir.path()).exit_code, 0);
+    const RunResult r = Est("filter --model '" + file + "'" + tail + " --out m.csv", dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("compiling"), std::string::npos) << "compiled again: " << r.err;
+    ExpectSameCsv(dir.File("b.csv"), dir.File("m.csv"), 1e-12);
+  }
+  const std::string tune =
+      " --measure sin --data d.csv --filter ekf --integrator rk4 --x0 theta=0.785398 "
+      "--p0-diag 0.1,0.1 --init-q-white-accel 0.3 --init-r-diag 0.3 --param g=9.8 --json";
+  const RunResult b = Est("tune --model pendulum" + tune, dir.path());
+  const RunResult m = Est("tune --model '" + file + "'" + tune, dir.path());
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  const auto tb = JsonArray(b.out, "theta"), tm = JsonArray(m.out, "theta");
+  ASSERT_EQ(tb.size(), 2u) << b.out;
+  ASSERT_EQ(tm.size(), tb.size()) << m.out;
+  for (size_t i = 0; i < tb.size(); ++i) EXPECT_NEAR(tm[i], tb[i], 1e-8 * std::max(1.0, std::abs(tb[i])));
+}
+
+TEST(ModelFile, DoublePendulumFileGivesTheBuiltInsNumbers) {
+  TempDir dir;
+  const std::string sim =
+      " --x0 theta1=0.785398,theta2=0.523599 --t-end 4 --dt 0.01 --measure angles "
+      "--meas-noise-var 0.0025,0.0016 --seed 4";
+  ASSERT_EQ(Est("simulate --model double-pendulum" + sim + " --out d.csv", dir.path()).exit_code, 0);
+  const std::string file = Example("double_pendulum.model");
+  const RunResult r = Est("simulate --model '" + file + "'" + sim + " --out f.csv", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ExpectSameCsv(dir.File("d.csv"), dir.File("f.csv"), 1e-12);
+  const std::string filter =
+      " --measure angles --data d.csv --integrator rk4 --x0 theta1=0.785398,theta2=0.523599 "
+      "--p0-diag 0.01,0.01,0.01,0.01 --q-diag 1e-6,1e-6,1e-4,1e-4 --r-diag 0.0025,0.0016 --seed 2";
+  for (const char* kind : {"ekf", "ukf", "pf"}) {
+    const std::string tail = filter + " --filter " + kind;
+    ASSERT_EQ(Est("filter --model double-pendulum" + tail + " --out b.csv", dir.path()).exit_code, 0);
+    const RunResult f = Est("filter --model '" + file + "'" + tail + " --out m.csv", dir.path());
+    ASSERT_EQ(f.exit_code, 0) << f.err;
+    ExpectSameCsv(dir.File("b.csv"), dir.File("m.csv"), 1e-12);
+  }
+}
+
+TEST(ModelFile, CppHeaderCompilesLoadsAndFilters) {
+  TempDir dir;
+  const std::string header = std::string(ESTLAB_SOURCE_DIR) + "/tests/plugin/data/spring.h";
+  const RunResult sim = Est("simulate --model '" + header +
+                                "' --x0 x=1 --t-end 5 --dt 0.01 --measure position "
+                                "--meas-noise-var 0.01 --seed 1 --out d.csv --json",
+                            dir.path());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const RunResult f = Est("filter --model '" + header +
+                              "' --measure position --data d.csv --filter ukf --x0 x=1 "
+                              "--q-diag 1e-8,1e-8 --r-diag 0.01 --json --out e.csv",
+                          dir.path());
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_NE(f.out.find("\"status\": \"ok\""), std::string::npos) << f.out;
+  // x(t) of x'' = -4 x - 0.1 x' from x = 1 is known in closed form: the
+  // filter's RMSE against the simulated truth is far below the noise (0.1).
+  const auto rmse = JsonArray(f.out, "rmse");
+  ASSERT_EQ(rmse.size(), 2u) << f.out;
+  EXPECT_LT(rmse[0], 0.05);
+  const RunResult show = Est("model show '" + header + "'", dir.path());
+  ASSERT_EQ(show.exit_code, 0) << show.err;
+  EXPECT_NE(show.out.find("spring"), std::string::npos);
+}
+
+// A copy of the pendulum with a changed default: a new key.
+std::string EditedPendulum(const std::string& dir, const std::string& g) {
+  std::string text = ReadFile(Example("pendulum.model"));
+  text = std::regex_replace(text, std::regex("name = pendulum-file"), "name = pendulum-edit");
+  text = std::regex_replace(text, std::regex("g = 9\\.81"), "g = " + g);
+  const std::string path = dir + "/edited.model";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(ModelFile, CacheCompilesOnceRebuildsEditsAndSurvivesConcurrentFirstUse) {
+  TempDir dir, cache;
+  const std::string path = EditedPendulum(dir.path(), "9.7");
+  const std::string build = "model build '" + path + "' --json";
+  RunResult a, b;
+  std::thread ta([&] { a = Est(build, dir.path(), cache.path()); });
+  std::thread tb([&] { b = Est(build, dir.path(), cache.path()); });
+  ta.join();
+  tb.join();
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const RunResult again = Est(build, dir.path(), cache.path());
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("\"compiled_entry\": false"), std::string::npos) << again.out;
+  EXPECT_EQ(again.err.find("compiling"), std::string::npos);
+  // Nothing temporary is left next to the library.
+  for (const auto& e : fs::recursive_directory_iterator(cache.path()))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  EditedPendulum(dir.path(), "9.6");  // an edit: another key, compiled anew
+  const RunResult edited = Est(build, dir.path(), cache.path());
+  ASSERT_EQ(edited.exit_code, 0) << edited.err;
+  EXPECT_NE(edited.out.find("\"compiled_entry\": true"), std::string::npos) << edited.out;
+}
+
+TEST(ModelFile, HeaderWithATypeErrorExits2AndLeavesNothing) {
+  TempDir dir, cache;
+  std::string text = ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/tests/plugin/data/spring.h");
+  text = std::regex_replace(text, std::regex("dx\\(0\\) = x\\(1\\);"), "dx(0) = \"oops\";");
+  std::ofstream(dir.File("broken.h")) << text;
+  const RunResult r = Est("filter --model broken.h --measure position --data d.csv --q-diag 1,1 "
+                          "--r-diag 1 --out e.csv",
+                          dir.path(), cache.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("broken.h:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not compile"), std::string::npos) << r.err;
+  EXPECT_FALSE(dir.Exists("e.csv"));
+  for (const auto& e : fs::recursive_directory_iterator(cache.path()))
+    EXPECT_FALSE(e.is_regular_file()) << "left behind: " << e.path();
+}
+
+TEST(ModelFile, MalformedModelFileExits2WithFileLineColumn) {
+  TempDir dir;
+  std::ofstream(dir.File("bad.model")) << "[model]\nname = bad\n[states]\nx =\n[rhs]\nx = y\n"
+                                          "[measurement pos]\nx = x\n";
+  for (const char* command : {"model check bad.model", "simulate --model bad.model --out o.csv"}) {
+    const RunResult r = Est(command, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_NE(r.err.find("bad.model:6:5:"), std::string::npos) << command << ": " << r.err;
+    EXPECT_FALSE(dir.Exists("o.csv"));
+  }
+}
+
+}  // namespace
+}  // namespace estlab::testing
