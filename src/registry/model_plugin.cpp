@@ -196,7 +196,11 @@ std::string EntryUnit(const ModelSource& s, const fs::path& header) {
          ".\n#include \"" + header.string() + "\"\n" +
          "#include \"src/registry/model_entry_impl.h\"\n"
          "#ifndef ESTLAB_MODEL_TYPE\n#define ESTLAB_MODEL_TYPE " +
-         type + "\n#endif\nESTLAB_DEFINE_MODEL_PLUGIN(ESTLAB_MODEL_TYPE)\n";
+         type + "\n#endif\n"
+         // Built with -fvisibility=hidden: only the entry point is exported.
+         "#pragma GCC visibility push(default)\n"
+         "ESTLAB_DEFINE_MODEL_PLUGIN(ESTLAB_MODEL_TYPE)\n"
+         "#pragma GCC visibility pop\n";
 }
 
 std::string TunerUnit(const ModelSource& s, const fs::path& header) {
@@ -213,7 +217,9 @@ std::string TunerUnit(const ModelSource& s, const fs::path& header) {
          "template std::unique_ptr<estlab::Transition<ESTLAB_MODEL_TYPE>>\n"
          "estlab::MakeTransition<ESTLAB_MODEL_TYPE>(const ESTLAB_MODEL_TYPE::Params&,\n"
          "                                          const estlab::TransitionOptions&);\n"
-         "ESTLAB_DEFINE_TUNER_PLUGIN(ESTLAB_MODEL_TYPE)\n";
+         "#pragma GCC visibility push(default)\n"
+         "ESTLAB_DEFINE_TUNER_PLUGIN(ESTLAB_MODEL_TYPE)\n"
+         "#pragma GCC visibility pop\n";
 }
 
 void* Open(const fs::path& library) {
