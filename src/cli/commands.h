@@ -24,6 +24,8 @@ int RunModel(const std::vector<std::string>& args);
 // A model's description as `estlab list` prints it (list_cmd.cpp).
 void PrintModel(const ModelEntry& model, std::ostream& out);
 void ModelJson(const ModelEntry& model, JsonWriter* json);
+// PrintModel to stdout, or ModelJson when `json`.
+void ShowModel(const ModelEntry& model, bool json);
 
 }  // namespace estlab::cli
 

@@ -61,6 +61,16 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
   out << "\n";
 }
 
+void ShowModel(const ModelEntry& model, bool json) {
+  if (!json) {
+    PrintModel(model, std::cout);
+    return;
+  }
+  JsonWriter j;
+  ModelJson(model, &j);
+  std::cout << j.str() << "\n";
+}
+
 int RunList(const std::vector<std::string>& args) {
   po::options_description desc("estlab list: models, measurements, parameters, integrators");
   desc.add_options()("help,h", "this text")("json", "machine-readable output")(
@@ -76,13 +86,7 @@ int RunList(const std::vector<std::string>& args) {
   }
   if (vm.count("model")) {
     const ModelEntry& m = FindModel(vm["model"].as<std::string>());
-    if (vm.count("json")) {
-      JsonWriter j;
-      ModelJson(m, &j);
-      std::cout << j.str() << "\n";
-    } else {
-      PrintModel(m, std::cout);
-    }
+    ShowModel(m, vm.count("json") > 0);
     return 0;
   }
   if (vm.count("json")) {

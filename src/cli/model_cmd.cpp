@@ -79,13 +79,7 @@ int RunModel(const std::vector<std::string>& args) {
     if (action == "build") {
       PrintBuild(m, json);
     } else if (action == "show") {
-      if (json) {
-        JsonWriter j;
-        ModelJson(m, &j);
-        std::cout << j.str() << "\n";
-      } else {
-        PrintModel(m, std::cout);
-      }
+      ShowModel(m, json);
     } else {
       std::cout << path << ": ok (model " << m.name << ", compiled)\n";
     }
@@ -95,12 +89,8 @@ int RunModel(const std::vector<std::string>& args) {
   if (action == "check") {
     std::cout << path << ": ok (model " << m.name << ": " << m.states.size() << " states, "
               << m.params.size() << " parameters, " << m.measurements.size() << " measurements)\n";
-  } else if (json) {
-    JsonWriter j;
-    ModelJson(m, &j);
-    std::cout << j.str() << "\n";
   } else {
-    PrintModel(m, std::cout);
+    ShowModel(m, json);
   }
   return 0;
 }

@@ -196,7 +196,8 @@ std::string EntryUnit(const ModelSource& s, const fs::path& header) {
          ".\n#include \"" + header.string() + "\"\n" +
          "#include \"src/registry/model_entry_impl.h\"\n"
          "#ifndef ESTLAB_MODEL_TYPE\n#define ESTLAB_MODEL_TYPE " +
-         type + "\n#endif\n"
+         type +
+         "\n#endif\n"
          // Built with -fvisibility=hidden: only the entry point is exported.
          "#pragma GCC visibility push(default)\n"
          "ESTLAB_DEFINE_MODEL_PLUGIN(ESTLAB_MODEL_TYPE)\n"
