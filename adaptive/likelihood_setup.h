@@ -81,6 +81,8 @@ const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
                             const std::vector<FilterData>& datasets) {
   std::string error;
   if (!IsTunable(spec, options, Model::kStateDim, &error)) throw InputError(error);
+  error = CheckIntegratorForModel(spec.transition.integrator, kDiscreteTime<Model>, Model::kName);
+  if (!error.empty()) throw InputError(error);
   if (spec.x0.size() != size_t(Model::kStateDim))
     throw InputError("x0 has " + std::to_string(spec.x0.size()) + " entries, expected " +
                      std::to_string(Model::kStateDim));

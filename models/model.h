@@ -13,6 +13,9 @@
 //   Params, kParams                  parameter struct and its table (name,
 //                                    member, description with unit, constraint)
 //   Rhs<T>(t, x, u, params)          dx/dt for any scalar T (double, Jet)
+//     or, for a discrete-time model (kDiscreteTime = true):
+//   Step<T>(t, x, dt, u, params)     x(t + dt) for any scalar T; such a model
+//                                    runs with Integrator::kDiscrete only
 //   kInvariantNames, Invariants(x, p), InvariantsHold(p, u)
 //   Measurements                     std::tuple of measurement structs
 // A measurement:
@@ -30,6 +33,33 @@
 
 namespace estlab {
 
+// True for a model that states its dynamics as a step map x(t + dt) =
+// Step(t, x, dt, u, p) (`static constexpr bool kDiscreteTime = true;`);
+// models without the member are continuous (Rhs).
+template <class M>
+consteval bool IsDiscreteTime() {
+  if constexpr (requires { M::kDiscreteTime; })
+    return bool(M::kDiscreteTime);
+  else
+    return false;
+}
+template <class M>
+inline constexpr bool kDiscreteTime = IsDiscreteTime<M>();
+
+// The dynamics: Rhs<T>(t, x, u, p) = dx/dt, or Step<T>(t, x, dt, u, p) for a
+// discrete-time model.
+template <class M>
+concept ContinuousDynamics =
+    !kDiscreteTime<M> &&
+    requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+  { M::template Rhs<double>(0.0, x, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
+};
+template <class M>
+concept DiscreteDynamics =
+    kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+  { M::template Step<double>(0.0, x, 0.1, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
+};
+
 template <class M>
 concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
   { M::kName } -> std::convertible_to<const char*>;
@@ -42,7 +72,7 @@ concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const typena
   requires M::kAngleStates.size() == std::size_t(M::kStateDim);
   { M::kPositionRatePairs.size() } -> std::convertible_to<std::size_t>;
   { M::kParams.size() } -> std::convertible_to<std::size_t>;
-  { M::template Rhs<double>(0.0, x, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
+  requires ContinuousDynamics<M> || DiscreteDynamics<M>;
   { M::kInvariantNames.size() } -> std::convertible_to<std::size_t>;
   M::Invariants(x, p);
   { M::InvariantsHold(p, 0.0) } -> std::convertible_to<bool>;

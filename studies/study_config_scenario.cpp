@@ -75,10 +75,15 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
 
   TransitionOptions& tr = truth.transition;
   tr.integrator =
-      Checked(Value{text_or("truth-integrator", "cvodes"),
+      Checked(Value{text_or("truth-integrator", model.discrete_time ? "discrete" : "cvodes"),
                     v.Has("truth-integrator") ? get("truth-integrator")->line : v.section().line,
                     "[" + sc.section + "] truth-integrator"},
-              err, [](const std::string& t) { return ParseIntegrator(t); });
+              err, [&](const std::string& t) {
+                const Integrator i = ParseIntegrator(t);
+                const std::string e = CheckIntegratorForModel(i, model.discrete_time, model.name);
+                if (!e.empty()) throw InputError(e);
+                return i;
+              });
   if (v.Has("truth-method")) {
     const std::string m = get("truth-method")->text;
     if (m == "bdf")

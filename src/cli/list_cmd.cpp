@@ -11,7 +11,8 @@ namespace po = boost::program_options;
 namespace estlab::cli {
 
 namespace {
-const std::vector<std::string> kIntegrators = {"cvodes", "rk4", "euler", "semi-implicit-euler"};
+const std::vector<std::string> kIntegrators = {"cvodes", "rk4", "euler", "semi-implicit-euler",
+                                               "discrete"};
 }
 
 void ModelJson(const ModelEntry& model, JsonWriter* json) {
@@ -35,6 +36,7 @@ void ModelJson(const ModelEntry& model, JsonWriter* json) {
   }
   j.EndArray();
   j.Key("has_input").Value(m->has_input).Key("stiff").Value(m->stiff);
+  j.Key("discrete_time").Value(m->discrete_time);
   j.Key("invariants").Value(m->invariants);
   j.EndObject();
 }
@@ -54,6 +56,7 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
       out << (k ? "," : "") << m->measurements[i].outputs[k];
   }
   if (m->has_input) out << "\n    input:        yes (--input or a 'u' column)";
+  if (m->discrete_time) out << "\n    time:         discrete (a step map; --integrator discrete)";
   if (!m->invariants.empty()) {
     out << "\n    invariants:   ";
     for (size_t i = 0; i < m->invariants.size(); ++i) out << (i ? ", " : "") << m->invariants[i];
@@ -105,7 +108,8 @@ int RunList(const std::vector<std::string>& args) {
   }
   std::cout << "\nIntegrators\n  cvodes (default; BDF for stiff models, Adams otherwise; --method "
                "bdf|adams)\n"
-            << "  rk4, euler, semi-implicit-euler (fixed step, --substeps N)\n";
+            << "  rk4, euler, semi-implicit-euler (fixed step, --substeps N)\n"
+            << "  discrete (a discrete-time model's own map: its default and only choice)\n";
   return 0;
 }
 

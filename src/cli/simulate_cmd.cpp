@@ -92,7 +92,8 @@ int RunSimulate(const std::vector<std::string>& args) {
       "t-end", po::value<std::string>()->default_value("10"), "final time [s]")(
       "dt", po::value<std::string>()->default_value("0.01"), "output step [s]")(
       "integrator", po::value<std::string>()->default_value("cvodes"),
-      "cvodes | rk4 | euler | semi-implicit-euler")(
+      "cvodes | rk4 | euler | semi-implicit-euler | discrete (a discrete-time model's own map: "
+      "its default and only choice)")(
       "method", po::value<std::string>()->default_value("default"),
       "CVODES method: bdf | adams | default (BDF for stiff models)")(
       "rtol", po::value<std::string>()->default_value("1e-10"), "CVODES relative tolerance")(
@@ -134,7 +135,14 @@ int RunSimulate(const std::vector<std::string>& args) {
     throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
   if (!(spec.dt > 0)) throw InputError("--dt must be > 0, got " + vm["dt"].as<std::string>());
   if (spec.t_end / spec.dt > 1e8) throw InputError("--t-end / --dt exceeds 1e8 output rows");
-  spec.transition.integrator = ParseIntegrator(vm["integrator"].as<std::string>());
+  // A discrete-time model's own map is its default (and only) integrator.
+  spec.transition.integrator = model.discrete_time && vm["integrator"].defaulted()
+                                   ? Integrator::kDiscrete
+                                   : ParseIntegrator(vm["integrator"].as<std::string>());
+  if (const std::string e = CheckIntegratorForModel(spec.transition.integrator,
+                                                    model.discrete_time, model.name);
+      !e.empty())
+    throw InputError("--integrator: " + e);
   const std::string method = vm["method"].as<std::string>();
   if (method == "bdf")
     spec.transition.method = CvodesMethod::kBdf;

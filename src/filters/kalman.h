@@ -21,6 +21,10 @@
 //   delta+ = Phi delta + Gamma (u - u*) + d.
 // A and H are exact (AD); B is a fourth-order central difference (see
 // InputJacobian in linearize.h). The discretisation is cached for the last dt.
+// A discrete-time model (kDiscreteTime) is its own discretisation: its map
+// over dt linearised at (x*, u*), Phi = dStep/dx, Gamma = dStep/du,
+// d = Step(x*, u*) - x* (StepMapJacobians); the transition's substeps do not
+// apply to the KF, as they do not for continuous models.
 //
 // WARNING: the linearisation is fixed. Far from x* the filter is simply the
 // wrong model; use the Ekf for that. With KfOptions::operating_point empty
@@ -142,9 +146,11 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
  private:
   // A = df/dx, B = df/du, c = f(x*, u*), h* = h(x*), H = dh/dx at (x*, u*).
   void Linearize() {
-    A_ = ContinuousJacobian<Model>(lin_.x_star, lin_.u_star, params_);
-    B_ = InputJacobian<Model>(lin_.x_star, lin_.u_star, params_);
-    c_ = ContinuousRhs<Model>(lin_.x_star, lin_.u_star, params_);
+    if constexpr (!kDiscreteTime<Model>) {  // a step map is linearised per dt (Discretize)
+      A_ = ContinuousJacobian<Model>(lin_.x_star, lin_.u_star, params_);
+      B_ = InputJacobian<Model>(lin_.x_star, lin_.u_star, params_);
+      c_ = ContinuousRhs<Model>(lin_.x_star, lin_.u_star, params_);
+    }
     lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, params_, &lin_.H);
     linear_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() &&
                      lin_.h_star.allFinite();
@@ -155,6 +161,14 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   // recomputed only when dt changes by more than 1e-12 relative.
   void Discretize(double dt) {
     if (cached_dt_ >= 0.0 && std::abs(dt - cached_dt_) <= 1e-12 * std::max(1.0, cached_dt_)) return;
+    if constexpr (kDiscreteTime<Model>) {
+      // A step map: Phi = dStep/dx, Gamma = dStep/du, d = Step(x*, u*) - x*.
+      step_.drift = StepMapJacobians<Model>(lin_.x_star, lin_.u_star, dt, params_, &step_.phi,
+                                            &step_.gamma) -
+                    lin_.x_star;
+      cached_dt_ = dt;
+      return;
+    }
     Mat<kN + 2, kN + 2> augmented = Mat<kN + 2, kN + 2>::Zero();
     augmented.template topLeftCorner<kN, kN>() = A_ * dt;
     augmented.template block<kN, 1>(0, kN) = B_ * dt;

@@ -48,17 +48,42 @@ Mat<Model::kStateDim, Model::kStateDim> ContinuousJacobian(const Vec<double, Mod
   return A;
 }
 
-// B = df/du (x, u) by the fourth-order central difference
+// B = df/du (x, u) by the fourth-order central difference of f(u) (any
+// vector function of the input, InputDerivative)
 //   B = [f(u - 2h) - 8 f(u - h) + 8 f(u + h) - f(u + 2h)] / (12 h),
 // h = 1e-3 max(1, |u|): truncation error O(h^4 d^5f/du^5), rounding about
 // 2 eps |f| / h. For inputs that enter affinely (forces on mechanical models)
 // the truncation error is zero and only the rounding remains.
+template <class F>
+auto InputDerivative(F&& f, double u) {
+  const double h = 1e-3 * std::max(1.0, std::abs(u));
+  return decltype(f(u))((f(u - 2.0 * h) - 8.0 * f(u - h) + 8.0 * f(u + h) - f(u + 2.0 * h)) /
+                        (12.0 * h));
+}
 template <class Model>
 Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>& x, double u,
                                             const typename Model::Params& params) {
-  const double h = 1e-3 * std::max(1.0, std::abs(u));
-  auto f = [&](double v) { return ContinuousRhs<Model>(x, v, params); };
-  return (f(u - 2.0 * h) - 8.0 * f(u - h) + 8.0 * f(u + h) - f(u + 2.0 * h)) / (12.0 * h);
+  return InputDerivative([&](double v) { return ContinuousRhs<Model>(x, v, params); }, u);
+}
+
+// A discrete-time model's map over dt linearised at (x*, u*):
+//   Step(x, u) ~= Step(x*, u*) + F (x - x*) + G (u - u*),
+// F = dStep/dx exact (AD), G = dStep/du by InputDerivative's central
+// difference. Returns Step(x*, u*).
+template <class Model>
+Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDim>& x, double u,
+                                               double dt, const typename Model::Params& params,
+                                               Mat<Model::kStateDim, Model::kStateDim>* F,
+                                               Vec<double, Model::kStateDim>* G) {
+  constexpr int N = Model::kStateDim;
+  *G = InputDerivative([&](double v) { return Model::template Step<double>(0.0, x, dt, v, params); },
+                       u);
+  return ValueAndJacobian<N, N>(
+      [&](const auto& xj) {
+        using T = typename std::decay_t<decltype(xj)>::Scalar;
+        return Model::template Step<T>(T(0.0), xj, dt, u, params);
+      },
+      x, F);
 }
 
 // h(x), and H = dh/dx (x) by automatic differentiation when H is not null,

@@ -33,10 +33,10 @@
 // invariants (as models/van_der_pol.h), true when no conserved-if-zero list
 // is given, else the AND of "listed name == 0" over all lists.
 //
-// WARNING: [step] (discrete-time) models get kDiscreteTime = true and a
-// Step(t, x, dt, u, p) returning x at t + dt, and NO Rhs: they do not satisfy
-// estlab::DynamicModel (models/model.h) until the framework is extended for
-// discrete-time models.
+// [step] (discrete-time) models get kDiscreteTime = true and a
+// Step(t, x, dt, u, p) returning x at t + dt instead of Rhs: the
+// DiscreteDynamics half of estlab::DynamicModel (models/model.h).
+// WARNING: such a model runs with Integrator::kDiscrete only.
 #ifndef ESTLAB_MODELFILE_CODEGEN_H_
 #define ESTLAB_MODELFILE_CODEGEN_H_
 

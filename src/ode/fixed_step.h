@@ -6,6 +6,8 @@
 //                        velocities (paper 003):  v+ = v + h a(t, q, v),
 //                        q+ = q + h q'(t, q, v+)
 //   rk4:                 classical fourth-order Runge-Kutta
+//   discrete:            a discrete-time model's own map, x+ = Step(t, x, h, u)
+//                        (models with kDiscreteTime; the only scheme they take)
 #ifndef ESTLAB_ODE_FIXED_STEP_H_
 #define ESTLAB_ODE_FIXED_STEP_H_
 
@@ -19,6 +21,9 @@ Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kState
                                    double h, double u, const typename Model::Params& p) {
   using State = Vec<T, Model::kStateDim>;
   const T tt(t);
+  if constexpr (kDiscreteTime<Model>) {
+    return Model::template Step<T>(tt, x, h, u, p);  // MakeTransition admits kDiscrete only
+  } else {
   switch (scheme) {
     case Integrator::kEuler:
       return x + h * Model::Rhs(tt, x, u, p);
@@ -40,12 +45,14 @@ Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kState
       return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
     }
   }
+  }
 }
 
-// Number of right-hand side evaluations per step of `scheme`.
+// Number of right-hand side (or step map) evaluations per step of `scheme`.
 inline int RhsEvalsPerStep(Integrator scheme) {
   switch (scheme) {
     case Integrator::kEuler:
+    case Integrator::kDiscrete:
       return 1;
     case Integrator::kSemiImplicitEuler:
       return 2;

@@ -9,8 +9,9 @@ Integrator ParseIntegrator(const std::string& name) {
   if (name == "semi-implicit-euler") return Integrator::kSemiImplicitEuler;
   if (name == "rk4") return Integrator::kRk4;
   if (name == "cvodes") return Integrator::kCvodes;
+  if (name == "discrete") return Integrator::kDiscrete;
   throw InputError("unknown integrator '" + name +
-                   "' (expected euler, semi-implicit-euler, rk4 or cvodes)");
+                   "' (expected euler, semi-implicit-euler, rk4, cvodes or discrete)");
 }
 
 const char* IntegratorName(Integrator integrator) {
@@ -23,8 +24,21 @@ const char* IntegratorName(Integrator integrator) {
       return "rk4";
     case Integrator::kCvodes:
       return "cvodes";
+    case Integrator::kDiscrete:
+      return "discrete";
   }
   return "?";
+}
+
+std::string CheckIntegratorForModel(Integrator integrator, bool discrete_time,
+                                    const std::string& model) {
+  if (discrete_time && integrator != Integrator::kDiscrete)
+    return "model '" + model + "' is discrete-time (a [step] map): it runs with integrator " +
+           "'discrete' only, got '" + IntegratorName(integrator) + "'";
+  if (!discrete_time && integrator == Integrator::kDiscrete)
+    return "integrator 'discrete' is for discrete-time models ([step]); model '" + model +
+           "' is continuous: use rk4, euler, semi-implicit-euler or cvodes";
+  return "";
 }
 
 bool TransitionOptions::IsValid(std::string* error) const {

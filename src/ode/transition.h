@@ -24,16 +24,25 @@
 
 namespace estlab {
 
-enum class Integrator { kEuler, kSemiImplicitEuler, kRk4, kCvodes };
+// kDiscrete: the model's own step map (discrete-time models, and only those).
+enum class Integrator { kEuler, kSemiImplicitEuler, kRk4, kCvodes, kDiscrete };
 enum class CvodesMethod { kDefault, kBdf, kAdams };
 
-// Parses "euler", "semi-implicit-euler", "rk4", "cvodes"; throws InputError.
+// Parses "euler", "semi-implicit-euler", "rk4", "cvodes", "discrete"; throws
+// InputError.
 Integrator ParseIntegrator(const std::string& name);
 const char* IntegratorName(Integrator integrator);
 
+// "" when `integrator` can run a model that is (or is not) discrete-time,
+// else the message saying why not: a discrete-time model takes kDiscrete
+// only, a continuous one anything but kDiscrete.
+std::string CheckIntegratorForModel(Integrator integrator, bool discrete_time,
+                                    const std::string& model);
+
 struct TransitionOptions {
   Integrator integrator = Integrator::kCvodes;
-  // Fixed-step integrators: number of equal substeps per Step() call.
+  // Fixed-step integrators: number of equal substeps per Step() call (for
+  // kDiscrete: the model's map applied `substeps` times with dt / substeps).
   int substeps = 1;
   // CVODES settings. kDefault = BDF for stiff models, Adams otherwise.
   CvodesMethod method = CvodesMethod::kDefault;

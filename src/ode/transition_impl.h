@@ -13,9 +13,9 @@
 
 namespace estlab {
 
-// Euler, semi-implicit Euler or RK4 with `substeps` equal steps per call; the
-// flow Jacobian is the exact derivative of the discrete map (AD through the
-// steps), not of the continuous flow.
+// Euler, semi-implicit Euler or RK4 with `substeps` equal steps per call (or
+// a discrete-time model's own map); the flow Jacobian is the exact derivative
+// of the discrete map (AD through the steps), not of the continuous flow.
 template <class Model>
 class FixedStepTransition final : public Transition<Model> {
  public:
@@ -72,8 +72,11 @@ std::unique_ptr<Transition<Model>> MakeTransition(const typename Model::Params& 
                                                   const TransitionOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
-  if (options.integrator == Integrator::kCvodes) {
-    return std::make_unique<CvodesTransition<Model>>(params, options);
+  error = CheckIntegratorForModel(options.integrator, kDiscreteTime<Model>, Model::kName);
+  if (!error.empty()) throw InputError(error);
+  if constexpr (!kDiscreteTime<Model>) {
+    if (options.integrator == Integrator::kCvodes)
+      return std::make_unique<CvodesTransition<Model>>(params, options);
   }
   return std::make_unique<FixedStepTransition<Model>>(params, options);
 }

@@ -22,7 +22,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"filter", "ukf", "kf | ekf | iekf | ukf | ckf | ghkf | pf", K::kValue, false, true},
       {"param", nullptr, "model parameter name=value (repeatable)", K::kRepeatable, false, true},
       {"t0", nullptr, "time of the prior (default: the first row's time)", K::kValue, false, true},
-      {"integrator", "rk4", "process model: rk4 | euler | semi-implicit-euler | cvodes"},
+      {"integrator", "rk4", "process model: rk4 | euler | semi-implicit-euler | cvodes | discrete (the default and only choice for a discrete-time model)"},
       {"substeps", "1", "fixed-step integrators: steps per measurement interval"},
       {"method", "default", "CVODES method: bdf | adams | default"},
       {"rtol", "1e-8", "CVODES relative tolerance"},
@@ -139,8 +139,15 @@ class Reader {
   const FilterSettings& s_;
 };
 
-void ReadTransition(const Reader& r, TransitionOptions* t) {
-  t->integrator = ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
+// A discrete-time model's process model is its own map: 'discrete' is its
+// default, and the only integrator either kind of model rejects is named.
+void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions* t) {
+  t->integrator = model.discrete_time && !r.Given("integrator")
+                      ? Integrator::kDiscrete
+                      : ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
+  const std::string error =
+      CheckIntegratorForModel(t->integrator, model.discrete_time, model.name);
+  if (!error.empty()) throw KeyError("integrator", error);
   t->substeps = int(r.Integer("substeps", 0));
   const std::string method = r.Text("method");
   if (method == "bdf")
@@ -292,7 +299,7 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   });
   const int m = int(meas.outputs.size());
   spec.params = ForKey("param", [&] { return model.ResolveParams(r.Assignments("param")); });
-  ReadTransition(r, &spec.transition);
+  ReadTransition(r, model, &spec.transition);
   if (r.Given("t0")) {
     spec.has_t0 = true;
     spec.t0 = r.Number("t0");

@@ -42,6 +42,7 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   for (const char* s : Model::kInvariantNames) e.invariants.push_back(s);
   e.has_input = Model::kHasInput;
   e.stiff = Model::kStiff;
+  e.discrete_time = kDiscreteTime<Model>;
   for (const auto& pair : Model::kPositionRatePairs) e.position_rate_pairs.push_back(pair);
   e.simulate = &Simulate<Model>;
   if constexpr (kWithTuner) e.tune = &TuneModel<Model>;  // generated tune/tune_<model>.cpp

@@ -342,6 +342,7 @@ ModelEntry DescribeModelFile(const std::string& path) {
   for (const modelfile::InvariantDecl& inv : m.invariants) e.invariants.push_back(inv.name);
   e.has_input = m.input.has_value();
   e.stiff = m.stiff;
+  e.discrete_time = m.discrete;
   return e;
 }
 

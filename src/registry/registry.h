@@ -52,6 +52,7 @@ struct ModelEntry {
   std::vector<std::string> invariants;
   bool has_input = false;
   bool stiff = false;
+  bool discrete_time = false;  // a step map x(t + dt) (Integrator::kDiscrete only)
 
   SimulationResult (*simulate)(const SimulationSpec&) = nullptr;
   FilterRunOutput (*run_filter)(const FilterSpec&, const FilterData&) = nullptr;

@@ -277,7 +277,8 @@ static_assert(estlab::DynamicModel<um::MultiarmSinglePendulum>);
 static_assert(estlab::DynamicModel<um::MultiarmDoublePendulum>);
 static_assert(estlab::kAllMeasurementsOf<um::PendulumFile>);
 static_assert(estlab::kAllMeasurementsOf<um::MultiarmDoublePendulum>);
-static_assert(um::LinearCv::kDiscreteTime && !estlab::DynamicModel<um::LinearCv>);
+static_assert(um::LinearCv::kDiscreteTime && estlab::DynamicModel<um::LinearCv>);
+static_assert(estlab::kDiscreteTime<um::LinearCv> && !estlab::kDiscreteTime<um::PendulumFile>);
 
 int main() {
   All<um::PendulumFile>();

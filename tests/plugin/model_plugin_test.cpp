@@ -184,6 +184,57 @@ TEST(ModelFile, CppHeaderCompilesLoadsAndFilters) {
   EXPECT_NE(show.out.find("spring"), std::string::npos);
 }
 
+// A discrete-time model file ([step]) simulates with its own map (the
+// default integrator; others refused), and on this linear model the KF, EKF
+// and UKF give the same log-likelihood, which is the tuner's NLL at the same
+// noise.
+TEST(ModelFile, DiscreteTimeModelSimulatesFiltersAndTunes) {
+  TempDir dir;
+  const std::string file = "'" + Example("linear_cv.model") + "'";
+  const RunResult sim = Est("simulate --model " + file +
+                                " --x0 pos=1,vel=0.5 --t-end 2 --dt 0.1 --measure position "
+                                "--meas-noise-var 0.01 --seed 2 --out d.csv --json",
+                            dir.path());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  EXPECT_NE(sim.out.find("\"integrator\": \"discrete\""), std::string::npos) << sim.out;
+  std::string header;
+  const auto rows = Numbers(ReadFile(dir.File("d.csv")), &header);
+  ASSERT_EQ(header, "t,pos,vel,z_pos");
+  ASSERT_EQ(rows.size(), 21u);
+  for (const auto& row : rows) {  // pos = 1 + 0.5 t, vel = 0.5: the map, step by step
+    EXPECT_NEAR(row[1], 1.0 + 0.5 * row[0], 1e-12);
+    EXPECT_EQ(row[2], 0.5);
+  }
+  const RunResult rk4 =
+      Est("simulate --model " + file + " --integrator rk4 --out x.csv", dir.path());
+  EXPECT_EQ(rk4.exit_code, 2);
+  EXPECT_NE(rk4.err.find("is discrete-time"), std::string::npos) << rk4.err;
+  EXPECT_FALSE(dir.Exists("x.csv"));
+
+  const std::string common =
+      " --measure position --data d.csv --x0 pos=1 --p0-diag 0.1,0.1 --q-diag 1e-6,1e-4 "
+      "--r-diag 0.01";
+  std::vector<double> logliks;
+  // (alpha = 1: the default 1e-3 puts weights of 2.5e5 on the points, whose
+  // rounding then shows at 1e-9; sigma_point_test.cpp.)
+  for (const std::string kind : {"kf", "ekf", "ukf --alpha 1 --sigma-update redraw"}) {
+    const RunResult f = Est("filter --model " + file + common + " --filter " + kind +
+                                " --json --out " + kind.substr(0, 3) + ".csv",
+                            dir.path());
+    ASSERT_EQ(f.exit_code, 0) << kind << ": " << f.err;
+    logliks.push_back(NumberAfter(f.out, "\"loglik\": "));
+  }
+  ExpectSameCsv(dir.File("kf.csv"), dir.File("ekf.csv"), 1e-10);
+  ExpectSameCsv(dir.File("kf.csv"), dir.File("ukf.csv"), 1e-10);
+  const RunResult tune = Est("tune --model " + file +
+                                 " --measure position --data d.csv --x0 pos=1 --p0-diag 0.1,0.1 "
+                                 "--init-q-diag 1e-6,1e-4 --init-r-diag 0.01 --filter kf --json",
+                             dir.path());
+  ASSERT_EQ(tune.exit_code, 0) << tune.err;
+  const double nll = NumberAfter(tune.out, "\"nll_initial\": ");
+  for (double loglik : logliks) EXPECT_NEAR(nll, -loglik, 1e-9 * std::abs(loglik)) << tune.out;
+}
+
 // A copy of the pendulum with a changed default: a new key.
 std::string EditedPendulum(const std::string& dir, const std::string& g) {
   std::string text = ReadFile(Example("pendulum.model"));
