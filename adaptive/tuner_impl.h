@@ -636,12 +636,4 @@ TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
     return &estlab::TuneModel<Model>;                         \
   }
 
-// The tuner of a model linked into a program (estlab_add_model ... TUNER;
-// src/registry/model_source.h): TuneModel<Model> instantiated, which the
-// entry (ESTLAB_DEFINE_LINKED_MODEL(Model, true)) points at.
-#define ESTLAB_DEFINE_LINKED_TUNER(Model)                                           \
-  template estlab::TuneResult estlab::TuneModel<Model>(const estlab::FilterSpec&,   \
-                                                       const estlab::TunerOptions&, \
-                                                       const std::vector<estlab::FilterData>&);
-
 #endif  // ESTLAB_ADAPTIVE_TUNER_IMPL_H_

@@ -1,7 +1,6 @@
 // Builds a model's registry entry from its compile-time description. Include
-// only from generated translation units: build/generated/models_inst/<model>.cpp
-// (models/model_list.cmake) and the entries of model files
-// (src/registry/model_source.h: a run-time plugin or a linked model).
+// only from the generated build/generated/models_inst/<model>.cpp
+// (models/model_list.cmake).
 #ifndef ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 #define ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_
 
@@ -67,20 +66,6 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   extern "C" const estlab::ModelEntry* estlab_model_entry_v1() {                    \
     static const estlab::ModelEntry entry = estlab::MakeModelEntry<Model, false>(); \
     return &entry;                                                                  \
-  }
-
-// The entry of a model linked into a program (estlab_add_model;
-// src/registry/model_source.h): registered at static initialisation, so
-// FindModel(Model::kName) finds it. kWithTuner: ESTLAB_DEFINE_LINKED_TUNER(Model)
-// is linked beside it.
-#define ESTLAB_DEFINE_LINKED_MODEL(Model, kWithTuner)                                    \
-  namespace {                                                                            \
-  const estlab::ModelEntry& LinkedModelEntry() {                                         \
-    static const estlab::ModelEntry entry = estlab::MakeModelEntry<Model, kWithTuner>(); \
-    return entry;                                                                        \
-  }                                                                                      \
-  [[maybe_unused]] const bool kLinkedModelRegistered =                                   \
-      estlab::RegisterLinkedModel(&LinkedModelEntry);                                    \
   }
 
 #endif  // ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_

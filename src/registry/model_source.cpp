@@ -67,8 +67,9 @@ std::string ModelEntryUnit(const ModelSource& s, const std::string& header, Mode
                            bool with_tuner) {
   std::string unit = UnitHead(s, header, "entry", "src/registry/model_entry_impl.h");
   if (linkage == ModelLinkage::kLinked)
-    return unit + "ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, " +
-           (with_tuner ? "true" : "false") + ")\n";
+    return unit + "#include \"src/registry/linked_models.h\"\n" +
+           "ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, " + (with_tuner ? "true" : "false") +
+           ")\n";
   // Built with -fvisibility=hidden: only the entry point is exported.
   return unit +
          "#pragma GCC visibility push(default)\n"
@@ -79,8 +80,11 @@ std::string ModelEntryUnit(const ModelSource& s, const std::string& header, Mode
 std::string ModelTunerUnit(const ModelSource& s, const std::string& header, ModelLinkage linkage) {
   std::string unit = UnitHead(s, header, "tuner", "adaptive/tuner_impl.h") +
                      "#include \"src/ode/transition_impl.h\"\n";
-  if (linkage == ModelLinkage::kLinked)  // the entry instantiates the transitions
-    return unit + "ESTLAB_DEFINE_LINKED_TUNER(ESTLAB_MODEL_TYPE)\n";
+  if (linkage == ModelLinkage::kLinked)  // the entry's ModelEntry::tune points here
+    return unit +
+           "template estlab::TuneResult estlab::TuneModel<ESTLAB_MODEL_TYPE>(\n"
+           "    const estlab::FilterSpec&, const estlab::TunerOptions&,\n"
+           "    const std::vector<estlab::FilterData>&);\n";
   // Its own transitions: entry.so is loaded RTLD_LOCAL, so its instantiation
   // is not visible here.
   return unit +

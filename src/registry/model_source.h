@@ -5,8 +5,9 @@
 //            with dlopen: each unit exports one extern "C" entry point;
 //   kLinked  into a program by the CMake function estlab_add_model (through
 //            `estlab model source FILE --out DIR`): the entry registers the
-//            model at static initialisation (RegisterLinkedModel, registry.h),
-//            so `FindModel("<name>")` finds it like a built-in model.
+//            model at static initialisation (RegisterLinkedModel, linked_models.h),
+//            so `FindModel("<name>")` finds it like a built-in model
+//            (linked_models.h).
 //
 // Usage:
 //   const ModelSource s = ReadModelSource("examples/models/pendulum.model");

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "src/registry/linked_models.h"
 #include "src/registry/model_plugin.h"
 
 namespace estlab {

@@ -10,12 +10,6 @@
 // Adding a model: one header in models/ (satisfying DynamicModel,
 // models/model.h) and one line in models/model_list.cmake; CMake generates
 // its entry (MakeModelEntry<Model>()) and its tuner translation units.
-// A program that links estlab builds its own models into itself with the
-// CMake function estlab_add_model (docs/models.md); they register
-// themselves (RegisterLinkedModel) and are found by name like these.
-//
-// WARNING: a name given twice (a linked model named like a built-in one)
-// makes FindModel throw for that name.
 #ifndef ESTLAB_REGISTRY_REGISTRY_H_
 #define ESTLAB_REGISTRY_REGISTRY_H_
 
@@ -76,14 +70,8 @@ struct ModelEntry {
   int StateIndex(const std::string& name) const;  // -1 when unknown
 };
 
-// The built-in models (models/model_list.cmake), then the linked ones.
+// The built-in models (models/model_list.cmake), then linked ones (linked_models.h).
 const std::vector<const ModelEntry*>& AllModels();
-
-// Adds a model linked into the program; called during static initialisation
-// by the entry.cpp that `estlab model source` generates
-// (ESTLAB_DEFINE_LINKED_MODEL, model_entry_impl.h). `entry` is called on
-// first use of the list. Returns true.
-bool RegisterLinkedModel(const ModelEntry& (*entry)());
 
 // What a command needs of a model compiled from a file (model_plugin.h).
 struct ModelNeeds {
@@ -91,8 +79,7 @@ struct ModelNeeds {
 };
 // A built-in model by name, or a model file: a path to a .model or .h file,
 // or a name found on ESTLAB_MODEL_PATH (compiled on first use, cached).
-// Throws InputError naming the known models, for a name given twice, and
-// for needs.tuner on a model linked without its tuner.
+// Throws InputError naming the known models (and see linked_models.h).
 const ModelEntry& FindModel(const std::string& name, ModelNeeds needs = {});
 
 }  // namespace estlab

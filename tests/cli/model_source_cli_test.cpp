@@ -12,6 +12,7 @@
 #include "src/core/types.h"
 #include "src/modelfile/codegen.h"
 #include "src/modelfile/model_file.h"
+#include "src/registry/linked_models.h"
 #include "src/registry/model_source.h"
 #include "src/registry/registry.h"
 
@@ -35,9 +36,9 @@ TEST(ModelSource, ModelFileWritesTheGeneratedHeaderEntryAndTuner) {
   EXPECT_NE(entry.find("#define ESTLAB_MODEL_TYPE estlab::user_models::PendulumFile\n"),
             std::string::npos);
   EXPECT_NE(entry.find("ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, true)\n"), std::string::npos);
-  EXPECT_NE(
-      ReadFile(dir.File("gen/tune.cpp")).find("ESTLAB_DEFINE_LINKED_TUNER(ESTLAB_MODEL_TYPE)"),
-      std::string::npos);
+  EXPECT_NE(ReadFile(dir.File("gen/tune.cpp"))
+                .find("template estlab::TuneResult estlab::TuneModel<ESTLAB_MODEL_TYPE>("),
+            std::string::npos);
   // Unchanged text is not rewritten (no rebuild of the model's entry).
   const auto before = fs::last_write_time(dir.File("gen/entry.cpp"));
   ASSERT_EQ(RunEstlab("model source '" + file + "' --out gen --tuner", dir.path()).exit_code, 0);
@@ -48,11 +49,14 @@ TEST(ModelSource, LinkedAndPluginEntriesShareAllButTheRegistration) {
   const ModelSource s = ReadModelSource(Source("examples/models/double_pendulum.model"));
   const std::string linked = ModelEntryUnit(s, "model.h", ModelLinkage::kLinked, false);
   const std::string plugin = ModelEntryUnit(s, "model.h", ModelLinkage::kPlugin, false);
-  const std::string head = linked.substr(0, linked.find("ESTLAB_DEFINE_LINKED_MODEL"));
+  const std::string head =
+      linked.substr(0, linked.find("#include \"src/registry/linked_models.h\""));
   EXPECT_EQ(plugin.substr(0, head.size()), head);
   EXPECT_NE(head.find("#include \"src/registry/model_entry_impl.h\""), std::string::npos);
   EXPECT_NE(plugin.find("ESTLAB_DEFINE_MODEL_PLUGIN(ESTLAB_MODEL_TYPE)"), std::string::npos);
-  EXPECT_EQ(linked.substr(head.size()), "ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, false)\n");
+  EXPECT_EQ(linked.substr(head.size()),
+            "#include \"src/registry/linked_models.h\"\n"
+            "ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, false)\n");
 }
 
 TEST(ModelSource, CppHeaderIsIncludedByPathWithoutATunerUnit) {
