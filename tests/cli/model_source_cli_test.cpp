@@ -86,24 +86,21 @@ TEST(ModelSource, BadInputExits2AndWritesNothing) {
 }
 
 // Entries as ESTLAB_DEFINE_LINKED_MODEL registers them.
+ModelEntry Named(const std::string& name) {
+  ModelEntry m;
+  m.name = name;
+  return m;
+}
 const ModelEntry& LinkedNoTuner() {
-  static const ModelEntry e = [] {
-    ModelEntry m;
-    m.name = "linked-no-tuner";
-    return m;
-  }();
+  static const ModelEntry e = Named("linked-no-tuner");
   return e;
 }
 const ModelEntry& LinkedTwiceA() {
-  static const ModelEntry e = [] {
-    ModelEntry m;
-    m.name = "linked-twice";
-    return m;
-  }();
+  static const ModelEntry e = Named("linked-twice");
   return e;
 }
 const ModelEntry& LinkedTwiceB() {
-  static const ModelEntry e = LinkedTwiceA();
+  static const ModelEntry e = Named("linked-twice");
   return e;
 }
 
