@@ -54,8 +54,9 @@ std::string ModelTunerUnit(const ModelSource& s, const std::string& header, Mode
 
 // What `estlab model source FILE --out DIR` writes, for static linking:
 // DIR/model.h (the generated header, or for a .h one line including it),
-// DIR/entry.cpp and with `with_tuner` DIR/tune.cpp. Files whose text is
-// unchanged are left alone. Returns the model's name. Throws InputError.
+// DIR/entry.cpp and with `with_tuner` DIR/tune.cpp, always rewritten (a
+// build rule's outputs must end newer than the model file, or make reruns
+// it and recompiles every time). Returns the model's name. Throws InputError.
 std::string WriteModelSources(const std::string& path, const std::string& dir, bool with_tuner);
 
 }  // namespace estlab
