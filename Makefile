@@ -13,7 +13,7 @@ export CCACHE_BASEDIR := $(CURDIR)
 # ... also for the sanitizer build (-g1): do not key on the build folder.
 export CCACHE_NOHASHDIR := 1
 
-.PHONY: all deps configure build test test-asan demo bench format clean
+.PHONY: all deps configure build install test test-asan demo bench format clean
 
 all: build
 
@@ -35,6 +35,12 @@ configure:
 
 build: configure
 	cmake --build $(BUILD) -j$(JOBS)
+
+# The binary, libraries, headers and CMake package (find_package(estlab);
+# docs/models.md) under PREFIX.
+PREFIX ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 test: deps build
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)

@@ -9,7 +9,13 @@
 //       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true   (one line)
 //
 // Names: <Filter>/<model>/n<states>m<outputs>/<integrator>[/particles],
-// Tuner/..., Study/<name>/jobs<k>.
+// Tuner/..., Study/<name>/jobs<k>. `double-pendulum-file` is
+// examples/models/double_pendulum.model, built in by estlab_add_model (the
+// user-model path; bit-identical numbers): its rows against the built-in's,
+// interleaved, give the cost of a user model
+//   build/bench/estlab_bench --benchmark_filter='^(EKF|UKF|RunFilter)/double-pendulum(-file)?/'
+//       --benchmark_repetitions=10 --benchmark_enable_random_interleaving=true
+//       --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
@@ -24,6 +30,7 @@
 #include <tuple>
 #include <vector>
 
+#include "estlab_bench_dp_file/model.h"  // generated (bench/CMakeLists.txt)
 #include "models/double_pendulum.h"
 #include "models/pendulum.h"
 #include "src/filters/ekf.h"
@@ -273,8 +280,52 @@ void Study_(benchmark::State& state, const std::string& file, int jobs) {
   state.counters["runs"] = double(runs);
 }
 
+// One filter run through the model's registry entry (ModelEntry::run_filter:
+// the code in its entry translation unit, the generated one of the built-in
+// or the entry.cpp of estlab_add_model), over `steps` steps of data
+// simulated once with RK4; items = steps.
+void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKindOptions kind) {
+  const ModelEntry& model = FindModel(model_name);
+  SimulationSpec sim;
+  sim.params = model.ResolveParams({});
+  sim.x0 = {0.7, 0.0, 0.5, 0.0};
+  sim.dt = 0.01;
+  sim.t_end = 9.99;  // 1000 rows
+  sim.transition.integrator = Integrator::kRk4;
+  sim.process_noise_var = {1e-6, 1e-4, 1e-6, 1e-4};
+  sim.measurement = "angles";
+  sim.meas_noise_var = {1e-2, 1e-2};
+  const SimulationResult s = model.simulate(sim);
+  FilterData d;
+  d.m = 2;
+  for (const auto& row : s.rows) {
+    d.t.push_back(row[0]);
+    d.lines.push_back(long(d.t.size()) + 1);
+    d.z.insert(d.z.end(), {row[5], row[6]});
+  }
+  FilterSpec spec;
+  spec.params = sim.params;
+  spec.measurement = "angles";
+  spec.filter = kind;
+  spec.transition.integrator = Integrator::kRk4;
+  spec.x0 = sim.x0;
+  spec.p0 = {1e-2, 0, 0, 0, 0, 1e-2, 0, 0, 0, 0, 1e-2, 0, 0, 0, 0, 1e-2};
+  spec.q = {1e-6, 0, 0, 0, 0, 1e-4, 0, 0, 0, 0, 1e-6, 0, 0, 0, 0, 1e-4};
+  spec.r = {1e-2, 0, 0, 1e-2};
+  for (auto _ : state) {
+    const FilterRunOutput out = model.run_filter(spec, d);
+    if (!out.summary.ok) {
+      state.SkipWithError(out.summary.message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(out.summary.loglik);
+  }
+  state.SetItemsProcessed(state.iterations() * long(d.t.size()));
+}
+
 using models::DoublePendulum;
 using models::Pendulum;
+using DpFile = user_models::DoublePendulumFile;
 using Cv = ConstantVelocity2d;
 
 void RegisterAll() {
@@ -311,6 +362,19 @@ void RegisterAll() {
       ->Unit(us);
   RegisterBenchmark("Floor/double-pendulum/rk4-with-jacobian/x1", Transitions_<DP>, 1, true, rk4);
   RegisterBenchmark("Floor/double-pendulum/rk4/x9", Transitions_<DP>, 9, false, rk4);
+  // The same model from examples/models/double_pendulum.model (estlab_add_model).
+  RegisterBenchmark("EKF/double-pendulum-file/n4m2/rk4", Ekf_<DpFile, DpFile::Angles>, rk4);
+  RegisterBenchmark("UKF/double-pendulum-file/n4m2/rk4", Sigma_<DpFile, DpFile::Angles>, rk4,
+                    SigmaRule::kUnscented);
+  // Whole runs through the registry entries (1000 steps), built-in and file.
+  for (const char* name : {"double-pendulum", "double-pendulum-file"}) {
+    RegisterBenchmark((std::string("RunFilter/") + name + "/ekf-rk4/1000-steps").c_str(),
+                      RunFilter_, std::string(name), FilterKindOptions{EkfOptions{}})
+        ->Unit(us);
+    RegisterBenchmark((std::string("RunFilter/") + name + "/ukf-rk4/1000-steps").c_str(),
+                      RunFilter_, std::string(name), FilterKindOptions{SigmaPointOptions{}})
+        ->Unit(us);
+  }
   // Cheap 4x2 model.
   RegisterBenchmark("UKF/cv2d/n4m2/euler", Sigma_<Cv, Cv::Positions>, Integrator::kEuler,
                     SigmaRule::kUnscented);

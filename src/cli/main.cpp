@@ -32,7 +32,8 @@ const std::vector<Command>& Commands() {
       {"merge", "join the result folders of a sharded study", estlab::cli::RunMerge},
       {"figures", "draw a study's figures with gnuplot", estlab::cli::RunFigures},
       {"list", "list models, measurements, parameters and integrators", estlab::cli::RunList},
-      {"model", "check, build or show a model file (.model or C++ header)", estlab::cli::RunModel},
+      {"model", "check, build, show or write the sources of a model file (.model or C++ header)",
+       estlab::cli::RunModel},
   };
   return commands;
 }

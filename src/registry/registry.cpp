@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "src/registry/linked_models.h"
 #include "src/registry/model_plugin.h"
 
 namespace estlab {
@@ -12,29 +13,53 @@ namespace estlab {
 #include "estlab_model_list.inc"
 #undef ESTLAB_MODEL
 
-const std::vector<const ModelEntry*>& AllModels() {
-  static const std::vector<const ModelEntry*> models = {
-#define ESTLAB_MODEL(Type, stem) &Type##Entry(),
-#include "estlab_model_list.inc"
-#undef ESTLAB_MODEL
-  };
-  return models;
+namespace {
+
+// Filled during static initialisation (a function-local static, so the
+// order of the translation units' initialisers does not matter).
+std::vector<const ModelEntry& (*)()>& LinkedEntries() {
+  static std::vector<const ModelEntry& (*)()> entries;
+  return entries;
 }
 
-namespace {
 std::string Join(const std::vector<std::string>& items) {
   std::string out;
   for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
   return out;
 }
+
 }  // namespace
+
+bool RegisterLinkedModel(const ModelEntry& (*entry)()) {
+  LinkedEntries().push_back(entry);
+  return true;
+}
+
+const std::vector<const ModelEntry*>& AllModels() {
+  static std::vector<const ModelEntry*> models = {
+#define ESTLAB_MODEL(Type, stem) &Type##Entry(),
+#include "estlab_model_list.inc"
+#undef ESTLAB_MODEL
+  };
+  static size_t linked = 0;  // the linked entries appended so far
+  for (; linked < LinkedEntries().size(); ++linked) models.push_back(&LinkedEntries()[linked]());
+  return models;
+}
 
 const ModelEntry& FindModel(const std::string& name, ModelNeeds needs) {
   std::vector<std::string> names;
+  const ModelEntry* found = nullptr;
   for (const ModelEntry* m : AllModels()) {
-    if (m->name == name) return *m;
+    if (m->name == name && found != nullptr)
+      throw InputError("model '" + name + "' is defined twice (a linked model named like " +
+                       "another; rename one in its file)");
+    if (m->name == name) found = m;
     names.push_back(m->name);
   }
+  if (found != nullptr && needs.tuner && found->tune == nullptr)
+    throw InputError("model '" + name + "' was linked without its tuner (estlab_add_model(" +
+                     "... TUNER), docs/models.md)");
+  if (found != nullptr) return *found;
   if (const std::string path = ResolveModelPath(name); !path.empty())
     return LoadModelFile(path, needs);
   if (IsModelPath(name)) throw InputError("model file '" + name + "' not found");

@@ -71,7 +71,7 @@ struct ModelEntry {
   int StateIndex(const std::string& name) const;  // -1 when unknown
 };
 
-// The built-in models (models/model_list.cmake).
+// The built-in models (models/model_list.cmake), then linked ones (linked_models.h).
 const std::vector<const ModelEntry*>& AllModels();
 
 // What a command needs of a model compiled from a file (model_plugin.h).
@@ -80,7 +80,7 @@ struct ModelNeeds {
 };
 // A built-in model by name, or a model file: a path to a .model or .h file,
 // or a name found on ESTLAB_MODEL_PATH (compiled on first use, cached).
-// Throws InputError naming the known models.
+// Throws InputError naming the known models (and see linked_models.h).
 const ModelEntry& FindModel(const std::string& name, ModelNeeds needs = {});
 
 }  // namespace estlab
