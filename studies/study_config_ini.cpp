@@ -111,7 +111,11 @@ const std::vector<std::string> kScenarioKeys = {"model",
                                                 "prior-p0-diag",
                                                 "prior-p0",
                                                 "input",
-                                                "description"};
+                                                "description",
+                                                "data",
+                                                "tune-data",
+                                                "column",
+                                                "truth"};
 const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-white-accel",
                                              "r",           "r-diag",        "scenarios",
                                              "filters",     "description",   "role",

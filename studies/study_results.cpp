@@ -25,9 +25,14 @@ std::vector<std::string> RunsColumns(const StudyConfig& config) {
   std::vector<std::string> c = {"scenario", "filter", "noise", "run", "seed", "status"};
   for (const auto& s : config.state_columns) c.push_back("rmse_" + s);
   for (const auto& s : config.state_columns) c.push_back("mae_" + s);
-  for (const char* m :
-       {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik", "steps", "message"})
-    c.push_back(m);
+  for (const char* m : {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik"}) c.push_back(m);
+  // Studies with recorded scenarios: the metrics that need no truth.
+  if (!config.output_columns.empty()) {
+    for (const char* m : {"nll_per_step", "nis_lo95", "nis_hi95"}) c.push_back(m);
+    for (const auto& o : config.output_columns) c.push_back("pred_rmse_" + o);
+  }
+  c.push_back("steps");
+  c.push_back("message");
   return c;
 }
 
@@ -433,6 +438,11 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
       for (const auto& st : sc.model->states) metrics.push_back("mae_" + st);
       for (const char* m : {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik"})
         metrics.push_back(m);
+      if (sc.recorded) {
+        for (const char* m : {"nll_per_step", "nis_lo95", "nis_hi95"}) metrics.push_back(m);
+        for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+          metrics.push_back("pred_rmse_" + o);
+      }
       for (const Combo& cb : sc.combos) {
         const std::string& f = config.filters[cb.filter].name;
         const std::string& n = config.noises[cb.noise].name;
@@ -496,7 +506,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
           for (size_t i = 0; i < ns; ++i) {
             const bool has = std::find(sc.model->states.begin(), sc.model->states.end(),
                                        config.state_columns[i]) != sc.model->states.end();
-            row.push_back(has ? Num(std::sqrt(a.sq[i] / double(a.n))) : "");
+            row.push_back(has && sc.has_truth ? Num(std::sqrt(a.sq[i] / double(a.n))) : "");
           }
           // Bounds of the average over N runs at one time: N * mean ~ chi2(N dim).
           double b[2];
