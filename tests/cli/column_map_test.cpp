@@ -83,7 +83,7 @@ TEST(ColumnMap, LoadFilterDataAppliesTheMaps) {
   const std::vector<ColumnMap> maps =
       ParseColumnMaps({"t=1e-3*t_ms", "z_theta=0.0174533*angle_deg-pi",
                        "theta=0.0174533*angle_deg-pi", "omega=rate"});
-  const FilterData d = LoadFilterData(path, model, model.FindMeasurement("angle"), maps);
+  const FilterData d = cli::LoadFilterData(path, model, model.FindMeasurement("angle"), maps);
   ASSERT_EQ(d.t.size(), 3u);
   EXPECT_DOUBLE_EQ(d.t[1], 0.01);
   EXPECT_DOUBLE_EQ(d.t[2], 0.02);
