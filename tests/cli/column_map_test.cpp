@@ -98,7 +98,8 @@ TEST(ColumnMap, LoadFilterDataAppliesTheMaps) {
   EXPECT_TRUE(std::isnan(d.truth[3]));  // the empty rate cell stays missing
   EXPECT_EQ(d.truth[5], -2.0);
   // read_truth = false: the state-named columns are not truth.
-  EXPECT_FALSE(LoadFilterData(path, model, model.FindMeasurement("angle"), maps, false).has_truth);
+  EXPECT_FALSE(
+      cli::LoadFilterData(path, model, model.FindMeasurement("angle"), maps, false).has_truth);
 }
 
 }  // namespace
