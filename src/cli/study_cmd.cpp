@@ -26,7 +26,8 @@ namespace {
 constexpr const char* kStudyHelp = R"(
 Runs every scenario of CONFIG (a studies/*.ini file, format in docs/studies.md)
 N times: each run simulates the truth once and runs every filter x noise
-setting on the same measurements.
+setting on the same measurements. A scenario with `data = FILES` runs on
+recorded files instead, one run per file (docs/studies.md, "Recorded data").
 
 Examples:
   estlab study studies/paper002_pendulum_mc.ini --out results/paper002 --jobs 2
@@ -35,6 +36,7 @@ Examples:
   estlab study S.ini --out r1 --shard 1/3   (and 2/3, 3/3 into r2, r3)
   estlab merge results/all r1 r2 r3
   estlab figures results/paper002
+  estlab study studies/multiarm_hand_vs_auto.ini --out results/multiarm --jobs 2
 
 Output folder: runs.csv (a row per scenario, run, filter and noise setting),
 summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
@@ -146,7 +148,8 @@ int RunStudyCommand(const std::vector<std::string>& args) {
                                             "study file (studies/*.ini)")(
       "out", po::value<std::string>(),
       "results folder (created; an existing one of the same study is resumed)")(
-      "runs", po::value<int>(), "Monte Carlo runs per scenario (overrides [study] runs)")(
+      "runs", po::value<int>(),
+      "Monte Carlo runs per scenario (overrides [study] runs; not for recorded data)")(
       "jobs", po::value<int>(), "worker threads (overrides [study] jobs)")(
       "shard", po::value<std::string>(), "k/N: only runs i with i % N == k-1")(
       "quiet", "no progress output")("json", "print a JSON summary on stdout");
