@@ -50,6 +50,8 @@
 //   column = z_theta=theta-pi        # ours=[a*]theirs[+-b], comma-separated
 //   truth = none                     # none (default) | columns: state-named
 //                                    #   columns are truth (RMSE, NEES)
+//   burn-in = 50                     # rows of each run left out of the NIS and
+//                                    #   the metrics that need no truth (default 0)
 //   # With data, x0, truth-*, dt, steps, process-noise, meas-noise*, measure-at-t0
 //   # are errors, and no noise section may use the oracle.
 //
@@ -173,6 +175,9 @@ struct ScenarioConfig {
   // often derived, not measured: they are not taken as truth by default).
   bool recorded = false;
   bool has_truth = true;  // simulated: always
+  // `burn-in = N`: the first N rows of each recorded run are left out of
+  // mean_nis, nis_in95 and the metrics that need no truth (study_metrics.h).
+  int burn_in = 0;
   std::vector<ColumnMap> columns;
   std::vector<FilterData> data_runs, tune_runs;
 };

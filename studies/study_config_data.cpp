@@ -27,7 +27,7 @@ const std::vector<std::string> kSimulationKeys = {"x0",
                                                   "meas-noise-var",
                                                   "meas-noise",
                                                   "measure-at-t0"};
-const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth"};
+const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth", "burn-in"};
 
 namespace {
 
@@ -100,6 +100,15 @@ void ReadRecordedData(const SectionValues& v, ScenarioConfig* sc) {
   }
   sc->data_runs = LoadFiles(v, "data", *sc);
   if (v.Has("tune-data")) sc->tune_runs = LoadFiles(v, "tune-data", *sc);
+  if (v.Has("burn-in")) {
+    sc->burn_in = Checked(*v.Get("burn-in"), v.errors(),
+                          [](const std::string& t) { return int(ParseInteger(t, "burn-in", 0)); });
+    size_t shortest = sc->data_runs.front().t.size();
+    for (const FilterData& d : sc->data_runs) shortest = std::min(shortest, d.t.size());
+    if (size_t(sc->burn_in) >= shortest)
+      v.Fail("burn-in", "must be less than the rows of every data file (the shortest has " +
+                            std::to_string(shortest) + ")");
+  }
   // For the report: the typical sampling interval and the longest run.
   sc->truth.dt = MedianStep(sc->data_runs.front().t);
   sc->steps = 0;

@@ -115,7 +115,8 @@ const std::vector<std::string> kScenarioKeys = {"model",
                                                 "data",
                                                 "tune-data",
                                                 "column",
-                                                "truth"};
+                                                "truth",
+                                                "burn-in"};
 const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-white-accel",
                                              "r",           "r-diag",        "scenarios",
                                              "filters",     "description",   "role",

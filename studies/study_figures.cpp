@@ -432,7 +432,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
   if (state.status != "complete")
     throw InputError("the study in '" + dir + "' is " + state.status +
                      "; finish it first (run its estlab study command again)");
-  const StudyConfig config = LoadStudyConfig(dir + "/config.ini");
+  const StudyConfig config = LoadResultsConfig(dir, state);
   const CsvText summary = ReadCsvText(dir + "/summary.csv");
   const CsvText tm = ReadCsvText(dir + "/time_metrics.csv");
 

@@ -72,7 +72,10 @@ std::string DiagText(const std::vector<double>& a, int n) {
   return (diagonal ? "diag" : "matrix with diagonal ") + VectorText(d);
 }
 
-int MeasurementsPerRun(const ScenarioConfig& sc) { return sc.steps + (sc.measure_at_t0 ? 1 : 0); }
+// The updates a run's mean NIS averages (the longest file, after the burn-in, on recorded data).
+int MeasurementsPerRun(const ScenarioConfig& sc) {
+  return sc.steps + (sc.measure_at_t0 ? 1 : 0) - sc.burn_in;
+}
 
 bool Matches(const std::string& pattern, const ScenarioConfig& sc) {
   return pattern == "*" || pattern == sc.name || "scenario." + pattern == sc.section;

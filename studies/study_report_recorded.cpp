@@ -55,7 +55,12 @@ void AvailabilityText(std::ostringstream& md, const ScenarioConfig& sc,
         "RMSE of each measured output (";
   for (size_t j = 0; j < outputs.size(); ++j) md << (j ? ", " : "") << "`" << outputs[j] << "`";
   md << "): the recorded measurement against the filter's prediction h(x_k|k-1), the innovation, "
-        "angles wrapped.\n\n";
+        "angles wrapped.\n";
+  if (sc.burn_in > 0)
+    md << "- The first " << sc.burn_in
+       << " rows of each run (the prior's transient) are left out of the NIS, the NLL per step "
+          "and the prediction RMSE (`burn-in`); `loglik` in runs.csv is the whole run's.\n";
+  md << "\n";
 }
 
 void MetricsTable(std::ostringstream& md, const StudyConfig& c, const StudyTables& t,

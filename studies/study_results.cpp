@@ -204,6 +204,13 @@ RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& col
 
 // ---------------------------------------------------------------------------
 
+StudyConfig LoadResultsConfig(const std::string& dir, const StudyState& state) {
+  const std::string copy = dir + "/config.ini";
+  const bool original_folder =
+      !state.config_path.empty() && fs::is_directory(fs::path(state.config_path).parent_path());
+  return ParseStudyConfig(ReadAll(copy), original_folder ? state.config_path : copy);
+}
+
 void WriteStudyState(const std::string& dir, const StudyState& s) {
   char hash[32];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(s.config_hash));
@@ -213,6 +220,7 @@ void WriteStudyState(const std::string& dir, const StudyState& s) {
       << s.shards << "\nstatus = " << s.status << "\nstarted = " << s.started
       << "\nfinished = " << s.finished << "\nwall-s = " << Num(s.wall_s) << "\njobs = " << s.jobs
       << "\n";
+  if (!s.config_path.empty()) out << "config-path = " << s.config_path << "\n";
   WriteTextFile(dir + "/study.state", out.str());
 }
 
@@ -238,6 +246,7 @@ bool ReadStudyState(const std::string& dir, StudyState* s) {
     s->finished = kv["finished"];
     s->wall_s = kv["wall-s"].empty() ? 0.0 : std::stod(kv["wall-s"]);
     s->jobs = kv["jobs"].empty() ? 1 : std::stoi(kv["jobs"]);
+    s->config_path = kv["config-path"];
   } catch (const std::exception&) {
     throw InputError(path + ": damaged study state file");
   }
@@ -545,7 +554,7 @@ void MergeStudies(const std::string& out, const std::vector<std::string>& shard_
                        "' is not a study results folder (no study.state)");
   }
   const std::string config_text = ReadAll(shard_dirs[0] + "/config.ini");
-  const StudyConfig config = ParseStudyConfig(config_text, shard_dirs[0] + "/config.ini");
+  const StudyConfig config = LoadResultsConfig(shard_dirs[0], states[0]);
   const StudyState& first = states[0];
   if (ConfigHash(config_text) != first.config_hash)
     throw InputError("merge: " + shard_dirs[0] + "/config.ini does not match its study.state");

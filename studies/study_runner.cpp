@@ -175,9 +175,8 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
 // nll_per_step, nis_lo95, nis_hi95, pred_rmse_OUTPUT for every output column
 // of the study (empty where this scenario's measurement has no such output).
 void AppendNoTruthMetrics(const StudyConfig& c, const ScenarioConfig& sc, bool ran,
-                          const FilterRunOutput& out, std::vector<std::string>* row) {
+                          const NoTruthMetrics& m, std::vector<std::string>* row) {
   const auto& outputs = sc.model->FindMeasurement(sc.truth.measurement).outputs;
-  const NoTruthMetrics m = ComputeNoTruthMetrics(out, outputs);
   row->push_back(ran ? Full(m.nll_per_step) : "");
   row->push_back(ran ? Full(m.nis_bounds95[0]) : "");
   row->push_back(ran ? Full(m.nis_bounds95[1]) : "");
@@ -262,12 +261,19 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     auto inside = [](double v, const double b[2]) {
       return std::isfinite(v) ? std::string(v >= b[0] && v <= b[1] ? "1" : "0") : std::string();
     };
+    // Recorded runs: the NIS after the scenario's burn-in (the prior's transient).
+    NoTruthMetrics no_truth;
+    if (!c.output_columns.empty())
+      no_truth = ComputeNoTruthMetrics(out, model.FindMeasurement(sc.truth.measurement).outputs,
+                                       sc.burn_in);
+    const double mean_nis = sc.recorded ? no_truth.mean_nis : sum.mean_nis;
+    const double* nis_bounds = sc.recorded ? no_truth.nis_bounds95 : sum.nis_bounds95;
     row.push_back(ran ? Full(sum.mean_nees) : "");
-    row.push_back(ran ? Full(sum.mean_nis) : "");
+    row.push_back(ran ? Full(mean_nis) : "");
     row.push_back(ran ? inside(sum.mean_nees, sum.nees_bounds95) : "");
-    row.push_back(ran ? inside(sum.mean_nis, sum.nis_bounds95) : "");
+    row.push_back(ran ? inside(mean_nis, nis_bounds) : "");
     row.push_back(ran ? Full(sum.loglik) : "");
-    if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, out, &row);
+    if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
     row.push_back(std::to_string(sum.steps));
     row.push_back(message);
     text.runs += FormatCsvRow(row);
@@ -564,6 +570,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   state.shards = options.shards;
   state.status = "running";
   state.jobs = jobs;
+  state.config_path = fs::absolute(config.path).lexically_normal().string();
   if (!resuming || state.started.empty()) state.started = NowUtc();
   const double previous_wall = resuming ? state.wall_s : 0.0;
   state.finished.clear();

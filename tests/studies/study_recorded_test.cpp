@@ -118,6 +118,10 @@ TEST_F(RecordedStudy, ConfigErrorsNameTheKey) {
       Replace(text, "measurement = angle\n", "measurement = angle\ntruth = yes\n");
   EXPECT_NE(ParseError(truth).find("truth: expected none or columns, got 'yes'"),
             std::string::npos);
+  const std::string burn = Replace(text, "burn-in = 20", "burn-in = 9167");
+  EXPECT_EQ(ParseError(burn), At(burn, "burn-in") +
+                                  "[scenario.single] burn-in: must be less than the rows of every "
+                                  "data file (the shortest has 9167)");
   // Recorded-data keys without data.
   EXPECT_NE(ParseError(Replace(TinyStudy(2), "measurement = sin\n",
                                "measurement = sin\ncolumn = z_sin_theta=s\n"))
@@ -125,21 +129,26 @@ TEST_F(RecordedStudy, ConfigErrorsNameTheKey) {
             std::string::npos);
 }
 
-// pred_rmse from the filter's innovations, NLL per step from its log-likelihood.
+// pred_rmse from the filter's innovations, NLL per step from its per-row
+// log-likelihood, by hand; `skip` leaves out the first rows.
 TEST(NoTruthMetrics, FromTheInnovationsByHand) {
   FilterRunOutput out;
   out.columns = {"t", "theta_est", "nu_theta", "nis", "loglik"};
-  out.rows = {{0.0, 0.1, 3.0, 1.0, -2.0}, {0.1, 0.1, NAN, NAN, NAN}, {0.2, 0.1, -4.0, 1.0, -3.0}};
-  out.summary.loglik = -5.0;
-  out.summary.updates = 2;
-  out.summary.nis_bounds95[0] = 0.1;
-  out.summary.nis_bounds95[1] = 3.5;
+  out.rows = {{0.0, 0.1, 3.0, 0.5, -2.0}, {0.1, 0.1, NAN, NAN, NAN}, {0.2, 0.1, -4.0, 1.5, -3.0}};
   const NoTruthMetrics m = ComputeNoTruthMetrics(out, {"theta", "omega"});
-  EXPECT_DOUBLE_EQ(m.nll_per_step, 2.5);  // 5 / 2
+  EXPECT_EQ(m.updates, 2);
+  EXPECT_DOUBLE_EQ(m.nll_per_step, 2.5);  // (2 + 3) / 2
+  EXPECT_DOUBLE_EQ(m.mean_nis, 1.0);      // (0.5 + 1.5) / 2
   ASSERT_EQ(m.pred_rmse.size(), 2u);
   EXPECT_DOUBLE_EQ(m.pred_rmse[0], std::sqrt(12.5));  // sqrt((9 + 16) / 2): the update rows only
   EXPECT_TRUE(std::isnan(m.pred_rmse[1]));            // no such output
-  EXPECT_EQ(m.nis_bounds95[1], 3.5);
+  // 2 updates of a 2-output NIS: 2 mean ~ chi2(4), quantiles 0.484419 and 11.143287.
+  EXPECT_NEAR(m.nis_bounds95[0], 0.484419 / 2, 1e-6);
+  EXPECT_NEAR(m.nis_bounds95[1], 11.143287 / 2, 1e-6);
+  const NoTruthMetrics late = ComputeNoTruthMetrics(out, {"theta"}, 1);
+  EXPECT_EQ(late.updates, 1);
+  EXPECT_DOUBLE_EQ(late.nll_per_step, 3.0);
+  EXPECT_DOUBLE_EQ(late.pred_rmse[0], 4.0);
 }
 
 // The filter's first innovation on recorded data is z_0 - theta_prior (no
@@ -169,6 +178,7 @@ TEST_F(RecordedStudy, SubsetStudyReportsMetricsWithoutTruth) {
   EXPECT_NE(report.find("**No truth**"), std::string::npos) << report;
   EXPECT_NE(report.find("RMSE, MAE and NEES are **not available**"), std::string::npos);
   EXPECT_NE(report.find("**No oracle**"), std::string::npos);
+  EXPECT_NE(report.find("The first 20 rows of each run"), std::string::npos);
   EXPECT_NE(report.find("Metrics available without truth: the innovation log-likelihood"),
             std::string::npos);
   EXPECT_NE(report.find("| ekf | `hand` | `tuned` | "), std::string::npos) << report;
@@ -187,9 +197,11 @@ TEST_F(RecordedStudy, SubsetStudyReportsMetricsWithoutTruth) {
     const double lo = std::stod(row[col("nis_lo95")]), hi = std::stod(row[col("nis_hi95")]);
     const double pred = std::stod(row[col("pred_rmse_theta")]);
     EXPECT_TRUE(std::isfinite(nll));
-    EXPECT_NEAR(std::stod(row[col("loglik")]), -nll * std::stod(row[col("steps")]),
-                1e-6 * std::abs(nll) * 9167);  // every row is an update
-    EXPECT_TRUE(lo > 0.9 && lo < 1.0 && hi > 1.0 && hi < 1.1) << lo << " " << hi;
+    EXPECT_TRUE(std::isfinite(std::stod(row[col("mean_nis")])));
+    EXPECT_EQ(row[col("steps")], "9167");
+    // 9167 rows - 20 burn-in = 9147 updates of a 1-output NIS: 1 -+ 1.96 sqrt(2 / 9147).
+    EXPECT_NEAR(lo, 1 - 1.96 * std::sqrt(2.0 / 9147), 1e-3);
+    EXPECT_NEAR(hi, 1 + 1.96 * std::sqrt(2.0 / 9147), 1e-3);
     // One-step-ahead error at 1 kHz: well below a degree, above zero.
     EXPECT_TRUE(pred > 0 && pred < 0.01) << pred;
   }
