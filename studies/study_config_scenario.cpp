@@ -36,10 +36,14 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     return v.Has(key) ? v.Get(key)->text : fallback;
   };
   if (!v.Has("model")) v.FailSection("'model' is required (see 'estlab list')");
-  // A model file's path is relative to the config file.
+  // A model file's path is relative to the config file; made absolute, so
+  // that the study and a later `estlab figures` (which reads the results
+  // folder's copy of the config) name it alike and share its compiled library.
   sc.model_source = get("model")->text;
   if (IsModelPath(sc.model_source) && !fs::path(sc.model_source).is_absolute())
-    sc.model_source = (fs::path(err.path()).parent_path() / sc.model_source).string();
+    sc.model_source = fs::absolute(fs::path(err.path()).parent_path() / sc.model_source)
+                          .lexically_normal()
+                          .string();
   sc.model =
       Checked(*get("model"), err, [&](const std::string&) { return &FindModel(sc.model_source); });
   const ModelEntry& model = *sc.model;

@@ -685,12 +685,15 @@ std::string StudyReportMarkdown(const StudyConfig& c, const StudyTables& t,
        << (built_in ? " (cited in estlab's docs/paper" + c.paper + ".md)" : std::string())
        << ".\n\n";
   }
-  bool any_recorded = false;
-  for (const auto& sc : c.scenarios) any_recorded |= sc.recorded;
-  md << state.runs << " Monte Carlo runs per scenario (study seed " << c.study.seed
-     << "; run i of scenario s uses seed DeriveSeed({seed, s, i})"
-     << (any_recorded ? "; a scenario on recorded data has one run per file" : "") << "), "
-     << c.scenarios.size() << " scenario(s), " << c.filters.size() << " filter(s), "
+  long recorded = 0;
+  for (const auto& sc : c.scenarios) recorded += sc.recorded;
+  if (recorded == long(c.scenarios.size()))
+    md << "Recorded data: one run per recorded file, nothing simulated, ";
+  else
+    md << state.runs << " Monte Carlo runs per scenario (study seed " << c.study.seed
+       << "; run i of scenario s uses seed DeriveSeed({seed, s, i})"
+       << (recorded ? "; a scenario on recorded data has one run per file" : "") << "), ";
+  md << c.scenarios.size() << " scenario(s), " << c.filters.size() << " filter(s), "
      << c.noises.size() << " noise setting(s). Status: " << state.status << "; wall time "
      << Sig(state.wall_s, 3) << " s with " << state.jobs << " worker thread(s).\n\n";
   md << "Filters:\n\n";

@@ -118,9 +118,10 @@ void HandVsTuned(std::ostringstream& md, const StudyConfig& c, const StudyTables
       better += wins;
       rows << "| " << f << " | `" << best_hand << "` | `" << tn << "` | " << CiCell(d, 4) << " |";
       for (const auto& o : outputs) {
-        const double hr = ComputeStats(Values(h, "pred_rmse_" + o)).mean;
-        const double ar = ComputeStats(Values(a, "pred_rmse_" + o)).mean;
-        rows << " " << Sig(hr) << " → " << Sig(ar) << " |";
+        const std::string metric = "pred_rmse_" + o;
+        rows << " " << Sig(ComputeStats(Values(h, metric)).mean) << " → "
+             << Sig(ComputeStats(Values(a, metric)).mean) << ", Δ "
+             << CiCell(Paired(a, h, metric), 3) << " |";
       }
       rows << " " << (d.n == 0 ? "–" : wins ? "tuned" : "hand") << " |\n";
     }
@@ -129,7 +130,8 @@ void HandVsTuned(std::ostringstream& md, const StudyConfig& c, const StudyTables
   md << "Hand vs tuned on the same recordings (paired per run; Δ NLL per step = tuned − best "
         "hand, negative: the tuned Q/R explain the measurements better):\n\n"
      << "| filter | best hand (by NLL) | tuned | Δ NLL per step [95 % CI] |";
-  for (const auto& o : outputs) md << " prediction RMSE " << o << ": hand → tuned |";
+  for (const auto& o : outputs)
+    md << " prediction RMSE " << o << ": hand → tuned, Δ = tuned − hand [95 % CI] |";
   md << " lower NLL |\n|---|---|---|---|";
   for (size_t j = 0; j < outputs.size(); ++j) md << "---|";
   md << "---|\n"
