@@ -13,22 +13,6 @@ namespace estlab::study_config {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kSimulationKeys = {"x0",
-                                                  "truth-x0",
-                                                  "dt",
-                                                  "steps",
-                                                  "truth-integrator",
-                                                  "truth-method",
-                                                  "truth-rtol",
-                                                  "truth-atol",
-                                                  "truth-substeps",
-                                                  "truth-max-steps",
-                                                  "process-noise",
-                                                  "meas-noise-var",
-                                                  "meas-noise",
-                                                  "measure-at-t0"};
-const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth", "burn-in"};
-
 namespace {
 
 // The files of a `data` / `tune-data` value: comma-separated globs relative to

@@ -154,6 +154,23 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
 }
 
+// One panel per state, one line per block j of the figure's .dat (t in
+// column 1, state i in column i + 2), the y label WHAT + state with its unit.
+void StatePanels(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
+                 const std::vector<size_t>& blocks, const std::string& what, Figure* fig) {
+  const auto& states = sc.model->states;
+  auto& b = fig->body();
+  for (size_t i = 0; i < states.size(); ++i) {
+    b << "  set ylabel " << Quote(Label(sc.model->name, what + states[i])) << "\n"
+      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      b << (j ? ", \\\n       " : "") << Quote(fig->dat_name()) << " index " << j
+        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    b << "\n";
+  }
+}
+
 void RmseTimeFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
                     const std::vector<size_t>& blocks, const std::string& term, Figure* fig,
                     std::vector<std::string>* scripts) {
@@ -162,15 +179,7 @@ void RmseTimeFigure(const ScenarioConfig& sc, const std::vector<ComboName>& comb
   auto& b = rmse.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
     << Quote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
-  for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote(Label(sc.model->name, "RMSE " + states[i])) << "\n"
-      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
-    for (size_t j = 0; j < blocks.size(); ++j)
-      b << (j ? ", \\\n       " : "") << Quote(rmse.dat_name()) << " index " << j
-        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
-    b << "\n";
-  }
+  StatePanels(sc, combos, blocks, "RMSE ", &rmse);
   b << "  unset multiplot\n";
   scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
 }
@@ -354,15 +363,7 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
     << Quote(sc.name + ", run " + std::to_string(run) +
              ": filter standard deviation sqrt(P) over time (log scale)")
     << "\n  set logscale y\n";
-  for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote(Label(sc.model->name, "sd " + states[i])) << "\n"
-      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
-    for (size_t j = 0; j < blocks.size(); ++j)
-      b << (j ? ", \\\n       " : "") << Quote(fig.dat_name()) << " index " << j
-        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
-    b << "\n";
-  }
+  StatePanels(sc, combos, blocks, "sd ", &fig);
   b << "  unset multiplot\n";
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
 }
