@@ -177,6 +177,11 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
       for (const auto& st : sc.model->states)
         if (std::find(c.state_columns.begin(), c.state_columns.end(), st) == c.state_columns.end())
           c.state_columns.push_back(st);
+      if (sc.recorded)
+        for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+          if (std::find(c.output_columns.begin(), c.output_columns.end(), o) ==
+              c.output_columns.end())
+            c.output_columns.push_back(o);
       for (size_t fi = 0; fi < c.filters.size(); ++fi) {
         const auto& fs = c.filters[fi].scenarios;
         if (!fs.empty() && std::find(fs.begin(), fs.end(), s->name) == fs.end()) continue;

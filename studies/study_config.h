@@ -43,6 +43,18 @@
 //   prior-p0-diag = 0.1,0.1          # or prior-p0 = a,b;c,d (default I)
 //   input = 0                        # constant input (models with an input)
 //
+//   # Recorded runs instead of simulated ones (docs/studies.md "Recorded data"):
+//   data = ../examples/data/multiarm/single/validate_*.csv   # glob or a, b list,
+//                                    #   relative to this file; one run per file
+//   tune-data = ../examples/data/multiarm/single/train_*.csv # what `tuned` fits on
+//   column = z_theta=theta-pi        # ours=[a*]theirs[+-b], comma-separated
+//   truth = none                     # none (default) | columns: state-named
+//                                    #   columns are truth (RMSE, NEES)
+//   burn-in = 50                     # rows of each run left out of the NIS and
+//                                    #   the metrics that need no truth (default 0)
+//   # With data, x0, truth-*, dt, steps, process-noise, meas-noise*, measure-at-t0
+//   # are errors, and no noise section may use the oracle.
+//
 //   Any scenario value may list alternatives separated by '|', each with an
 //   optional label:  x0 = pi4: theta=0.785398 | pi2: theta=1.570796
 //   The scenario then expands to the product of all alternatives, named
@@ -101,6 +113,7 @@
 #include <vector>
 
 #include "adaptive/tuner.h"
+#include "src/options/column_map.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
 
@@ -154,7 +167,25 @@ struct ScenarioConfig {
   std::vector<double> poisson_lambda;
   std::vector<double> prior_x0, prior_p0;
   std::vector<Combo> combos;  // filter-major, in file order
+
+  // `data =`: recorded runs instead of simulated ones. Run i is the i-th
+  // file (sorted glob expansion, in list order), read when the config is
+  // loaded; `tuned` noise fits on the tune-data files. There is no oracle,
+  // and truth only with `truth = columns` (recorded state-like columns are
+  // often derived, not measured: they are not taken as truth by default).
+  bool recorded = false;
+  bool has_truth = true;  // simulated: always
+  // `burn-in = N`: the first N rows of each recorded run are left out of
+  // mean_nis, nis_in95 and the metrics that need no truth (study_metrics.h).
+  int burn_in = 0;
+  std::vector<ColumnMap> columns;
+  std::vector<FilterData> data_runs, tune_runs;
 };
+
+// Runs of a scenario: its number of files when recorded, else `runs`.
+inline int ScenarioRuns(const ScenarioConfig& sc, int runs) {
+  return sc.recorded ? int(sc.data_runs.size()) : runs;
+}
 
 struct FilterConfig {
   std::string name;
@@ -210,6 +241,11 @@ struct StudyConfig {
   // Union of the scenarios' state names, in order of first appearance: the
   // rmse_/mae_ columns of runs.csv.
   std::vector<std::string> state_columns;
+  // Union of the recorded scenarios' measured outputs: runs.csv gets the
+  // columns that need no truth (nll_per_step, nis_lo95, nis_hi95 and
+  // pred_rmse_OUTPUT) only when this is not empty, so that studies on
+  // simulated data keep their files.
+  std::vector<std::string> output_columns;
 };
 
 // Reads and validates `path` completely (every FilterSpec is built and every

@@ -68,6 +68,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (!val) continue;
     const std::string k = key;
     const std::string which = k.substr(0, 1);
+    if (sc.recorded && (val->text == "oracle" || val->text == "oracle-std"))
+      noise.Fail(k, "no oracle on recorded data: [" + sc.section +
+                        "] has no known noise (use a hand Q/R or '" + which + " = tuned')");
     if (val->text == "oracle-std") {
       // Paper 003's sweep: R = diag(std) instead of diag(std^2).
       if (k != "r") noise.Fail(k, "'oracle-std' goes in key r");
@@ -92,6 +95,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
         add(ik.substr(5), init->text, init);
       }
       if (!init) {
+        if (sc.recorded)
+          noise.Fail(k, "'tuned' on recorded data needs a start (init-" + which +
+                            "-diag, ...): there is no oracle to start from");
         (which == "q" ? q_oracle : r_oracle) = true;
         add(which + "-diag",
             which == "q" ? JoinDoubles(std::vector<double>(n, 0.0))
@@ -141,7 +147,8 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (r_oracle_std)
       for (double& x : spec.r) x = std::sqrt(x);
   }
-  spec.has_t0 = !sc.measure_at_t0;
+  // Simulated runs: the prior holds at t = 0; recorded runs: at the first row.
+  spec.has_t0 = !sc.measure_at_t0 && !sc.recorded;
   spec.t0 = 0.0;
   if (q_tuned || r_tuned) {
     combo.tune = true;
@@ -179,6 +186,16 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
                      [&](const std::string& t) { return ParseInteger(t, key, min_value); });
     };
     combo.tune_datasets = int(integer("tune-datasets", 3, 1));
+    if (sc.recorded) {
+      // The tuning runs are the scenario's tune-data files.
+      const std::string key = q_tuned ? "q" : "r";
+      if (noise.Has("tune-datasets"))
+        noise.Fail("tune-datasets",
+                   "not used on recorded data ([" + sc.section + "] fits on its tune-data files)");
+      if (sc.tune_runs.empty())
+        noise.Fail(key, "[" + sc.section + "] has no tune-data files to fit on");
+      combo.tune_datasets = int(sc.tune_runs.size());
+    }
     t.starts = int(integer("tune-starts", 1, 1));
     t.burn_in = int(integer("tune-burn-in", 0, 0));
     t.compute_std_errors = true;

@@ -90,28 +90,30 @@ const std::vector<std::string> kStudyKeys = {
     "name", "description", "seed", "runs", "jobs", "keep-runs", "step-metrics-every"};
 const std::vector<std::string> kReportKeys = {"paper", "title", "tables", "overview"};
 const std::vector<std::string> kReportRepeatedKeys = {"reference", "claim", "note"};
-const std::vector<std::string> kScenarioKeys = {"model",
-                                                "params",
-                                                "x0",
-                                                "truth-x0",
-                                                "dt",
-                                                "steps",
-                                                "truth-integrator",
-                                                "truth-method",
-                                                "truth-rtol",
-                                                "truth-atol",
-                                                "truth-substeps",
-                                                "truth-max-steps",
-                                                "process-noise",
-                                                "measurement",
-                                                "meas-noise-var",
-                                                "meas-noise",
-                                                "measure-at-t0",
-                                                "prior-x0",
-                                                "prior-p0-diag",
-                                                "prior-p0",
-                                                "input",
-                                                "description"};
+// Scenario keys: the simulation's, those of recorded runs (study_config_data.cpp
+// uses both lists to reject the other kind), and the common ones.
+const std::vector<std::string> kSimulationKeys = {"x0",
+                                                  "truth-x0",
+                                                  "dt",
+                                                  "steps",
+                                                  "truth-integrator",
+                                                  "truth-method",
+                                                  "truth-rtol",
+                                                  "truth-atol",
+                                                  "truth-substeps",
+                                                  "truth-max-steps",
+                                                  "process-noise",
+                                                  "meas-noise-var",
+                                                  "meas-noise",
+                                                  "measure-at-t0"};
+const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth", "burn-in"};
+const std::vector<std::string> kScenarioKeys = [] {
+  std::vector<std::string> keys = {"model",    "params", "measurement", "prior-x0", "prior-p0-diag",
+                                   "prior-p0", "input",  "description", "data"};
+  keys.insert(keys.end(), kSimulationKeys.begin(), kSimulationKeys.end());
+  keys.insert(keys.end(), kRecordedKeys.begin(), kRecordedKeys.end());
+  return keys;
+}();
 const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-white-accel",
                                              "r",           "r-diag",        "scenarios",
                                              "filters",     "description",   "role",

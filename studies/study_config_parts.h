@@ -143,6 +143,12 @@ std::vector<Alternative> ParseAlternatives(const Entry& e, const ConfigErrors& e
 
 StudySettings ParseStudy(const SectionValues& v);
 ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err);
+// Recorded runs: the simulation keys a scenario with `data` must not have
+// and the keys that need `data` (both lists in study_config_ini.cpp), and
+// the reading of data, tune-data, column, truth and burn-in into *sc (whose
+// model and measurement are set; study_config_data.cpp).
+extern const std::vector<std::string> kSimulationKeys, kRecordedKeys;
+void ReadRecordedData(const SectionValues& v, ScenarioConfig* sc);
 // Expands the '|' alternatives of a scenario section into one Section per
 // combination (product in key order; the last key varies fastest).
 std::vector<std::pair<Section, std::vector<std::pair<std::string, std::string>>>> ExpandScenario(

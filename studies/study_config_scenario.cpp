@@ -36,10 +36,14 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     return v.Has(key) ? v.Get(key)->text : fallback;
   };
   if (!v.Has("model")) v.FailSection("'model' is required (see 'estlab list')");
-  // A model file's path is relative to the config file.
+  // A model file's path is relative to the config file; made absolute, so
+  // that the study and a later `estlab figures` (which reads the results
+  // folder's copy of the config) name it alike and share its compiled library.
   sc.model_source = get("model")->text;
   if (IsModelPath(sc.model_source) && !fs::path(sc.model_source).is_absolute())
-    sc.model_source = (fs::path(err.path()).parent_path() / sc.model_source).string();
+    sc.model_source = fs::absolute(fs::path(err.path()).parent_path() / sc.model_source)
+                          .lexically_normal()
+                          .string();
   sc.model =
       Checked(*get("model"), err, [&](const std::string&) { return &FindModel(sc.model_source); });
   const ModelEntry& model = *sc.model;
@@ -58,6 +62,13 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       return model.ResolveState(ParseAssignments({t}, key), key);
     });
   };
+  // Recorded runs: nothing is simulated, so no simulation key applies.
+  const bool recorded = v.Has("data");
+  for (const auto& key : recorded ? kSimulationKeys : kRecordedKeys) {
+    if (v.Has(key))
+      v.Fail(key, recorded ? "not allowed with data (recorded runs are not simulated)"
+                           : "applies only with data = FILES (recorded runs)");
+  }
   truth.x0 = v.Has("x0") ? parse_state("x0") : std::vector<double>(n, 0.0);
   if (v.Has("truth-x0")) {
     const std::string mode = get("truth-x0")->text;
@@ -65,13 +76,15 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       v.Fail("truth-x0", "expected fixed or sample, got '" + mode + "'");
     sc.sample_x0 = mode == "sample";
   }
-  if (!v.Has("dt")) v.FailSection("'dt' is required");
-  truth.dt = Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
-  if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
-  if (!v.Has("steps")) v.FailSection("'steps' is required");
-  sc.steps = Checked(*get("steps"), err,
-                     [](const std::string& t) { return int(ParseInteger(t, "steps", 1)); });
-  truth.t_end = sc.steps * truth.dt;
+  if (!recorded) {
+    if (!v.Has("dt")) v.FailSection("'dt' is required");
+    truth.dt = Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
+    if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
+    if (!v.Has("steps")) v.FailSection("'steps' is required");
+    sc.steps = Checked(*get("steps"), err,
+                       [](const std::string& t) { return int(ParseInteger(t, "steps", 1)); });
+    truth.t_end = sc.steps * truth.dt;
+  }
 
   TransitionOptions& tr = truth.transition;
   tr.integrator =
@@ -203,6 +216,8 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     if (truth.input != 0 && !model.has_input)
       v.Fail("input", "model '" + model.name + "' has no input");
   }
+
+  if (recorded) ReadRecordedData(v, &sc);
 
   sc.prior_x0 = v.Has("prior-x0") ? parse_state("prior-x0") : truth.x0;
   if (v.Has("prior-p0-diag") && v.Has("prior-p0"))

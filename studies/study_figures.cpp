@@ -136,7 +136,8 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
   }
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() + " estimate vs truth")
+    << Quote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
+             (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
     << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
     const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
@@ -144,11 +145,70 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
       << Quote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd', \\\n"
-      << "       '' using 1:" << c0 << " with lines lw 2 lc rgb 'black' title 'truth', \\\n"
+      << (sc.has_truth ? "       '' using 1:" + std::to_string(c0) +
+                             " with lines lw 2 lc rgb 'black' title 'truth', \\\n"
+                       : std::string())
       << "       '' using 1:" << c0 + 1 << " with lines lw 1.5 lc rgb '#1f77b4' title 'estimate'\n";
   }
   b << "  unset multiplot\n";
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
+}
+
+// One panel per state, one line per block j of the figure's .dat (t in
+// column 1, state i in column i + 2), the y label WHAT + state with its unit.
+void StatePanels(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
+                 const std::vector<size_t>& blocks, const std::string& what, Figure* fig) {
+  const auto& states = sc.model->states;
+  auto& b = fig->body();
+  for (size_t i = 0; i < states.size(); ++i) {
+    b << "  set ylabel " << Quote(Label(sc.model->name, what + states[i])) << "\n"
+      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      b << (j ? ", \\\n       " : "") << Quote(fig->dat_name()) << " index " << j
+        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    b << "\n";
+  }
+}
+
+void RmseTimeFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
+                    const std::vector<size_t>& blocks, const std::string& term, Figure* fig,
+                    std::vector<std::string>* scripts) {
+  const auto& states = sc.model->states;
+  Figure& rmse = *fig;
+  auto& b = rmse.body();
+  b << "  set multiplot layout " << states.size() << ",1 title "
+    << Quote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
+  StatePanels(sc, combos, blocks, "RMSE ", &rmse);
+  b << "  unset multiplot\n";
+  scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
+}
+
+// Mean NEES and NIS over time with their bounds; NIS only without truth.
+void ConsistencyFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
+                       const std::vector<size_t>& blocks, const std::string& term, Figure* fig,
+                       std::vector<std::string>* scripts) {
+  Figure& cons = *fig;
+  auto& c = cons.body();
+  c << "  set multiplot layout " << (sc.has_truth ? 2 : 1) << ",1 title "
+    << Quote(sc.name + (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
+             " across runs, 95 % bounds dashed")
+    << "\n"
+    << "  set logscale y\n";
+  for (int panel = sc.has_truth ? 0 : 1; panel < 2; ++panel) {
+    const int col = panel == 0 ? 2 : 5;
+    c << "  set ylabel " << Quote(panel == 0 ? "NEES" : "NIS") << "\n"
+      << (panel == 1 ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
+    for (size_t j = 0; j < blocks.size(); ++j)
+      c << (j ? ", \\\n       " : "") << Quote(cons.dat_name()) << " index " << j
+        << " using 1:" << col << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
+        << Quote(combos[blocks[j]].label());
+    c << ", \\\n       '' index 0 using 1:" << col + 1
+      << " with lines dt 2 lc rgb 'gray30' title '95 % bounds', \\\n       '' index 0 using 1:"
+      << col + 2 << " with lines dt 2 lc rgb 'gray30' notitle\n";
+  }
+  c << "  unset multiplot\n";
+  scripts->push_back(cons.Write(term, 900, sc.has_truth ? 700 : 380));
 }
 
 void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos, const CsvText& tm,
@@ -189,50 +249,25 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
     }
   }
   if (blocks.empty()) return;
-  auto& b = rmse.body();
-  b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
-  for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote(Label(sc.model->name, "RMSE " + states[i])) << "\n"
-      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
-    for (size_t j = 0; j < blocks.size(); ++j)
-      b << (j ? ", \\\n       " : "") << Quote(rmse.dat_name()) << " index " << j
-        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
-    b << "\n";
-  }
-  b << "  unset multiplot\n";
-  scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
-
-  auto& c = cons.body();
-  c << "  set multiplot layout 2,1 title "
-    << Quote(sc.name + ": mean NEES and NIS across runs, 95 % bounds dashed") << "\n"
-    << "  set logscale y\n";
-  for (int panel = 0; panel < 2; ++panel) {
-    const int col = panel == 0 ? 2 : 5;
-    c << "  set ylabel " << Quote(panel == 0 ? "NEES" : "NIS") << "\n"
-      << (panel == 1 ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
-    for (size_t j = 0; j < blocks.size(); ++j)
-      c << (j ? ", \\\n       " : "") << Quote(cons.dat_name()) << " index " << j
-        << " using 1:" << col << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
-    c << ", \\\n       '' index 0 using 1:" << col + 1
-      << " with lines dt 2 lc rgb 'gray30' title '95 % bounds', \\\n       '' index 0 using 1:"
-      << col + 2 << " with lines dt 2 lc rgb 'gray30' notitle\n";
-  }
-  c << "  unset multiplot\n";
-  scripts->push_back(cons.Write(term, 900, 700));
+  if (sc.has_truth) RmseTimeFigure(sc, combos, blocks, term, &rmse, scripts);
+  ConsistencyFigure(sc, combos, blocks, term, &cons, scripts);
 }
 
-// Mean RMSE per filter x noise with the 95 % CI of the mean, one panel per
-// state, settings on the y axis (long names stay readable), coloured by
-// their role: oracle blue, auto-tuned red, hand-tuned grey.
+// One panel of MeansFigure: a summary.csv metric and its axis label.
+struct MeanPanel {
+  std::string metric, label;
+};
+
+// The mean of each panel's metric per filter x noise with the 95 % CI of the
+// mean, settings on the y axis (long names stay readable), coloured by their
+// role: oracle blue, auto-tuned red, hand-tuned grey. SCEN_rmse_means has one
+// panel per state; on recorded data SCEN_pred_rmse_means one per output.
 void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
                  const std::vector<ComboName>& combos, const CsvText& summary,
-                 const std::string& folder, const std::string& term,
+                 const std::vector<MeanPanel>& panels, const std::string& name,
+                 const std::string& what, const std::string& folder, const std::string& term,
                  std::vector<std::string>* scripts) {
-  const auto& states = sc.model->states;
-  Figure fig(folder, sc.name + "_rmse_means");
+  Figure fig(folder, sc.name + "_" + name);
   const int mc = summary.Column("metric"), mean = summary.Column("mean");
   const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
   auto role_color = [&](const std::string& noise) {
@@ -240,13 +275,13 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
       if (n.name == noise) return n.role == "oracle" ? 0 : n.role == "tuned" ? 1 : 2;
     return 2;
   };
-  for (const auto& s : states) {
-    fig.dat() << "# rmse_" << s
+  for (const MeanPanel& p : panels) {
+    fig.dat() << "# " << p.metric
               << ": index label mean ci95_lo ci95_hi role(0 oracle, 1 tuned, 2 hand)\n";
     for (size_t k = 0; k < combos.size(); ++k)
       for (const auto& r : summary.rows)
         if (r[0] == sc.name && r[1] == combos[k].filter && r[2] == combos[k].noise &&
-            r[mc] == "rmse_" + s)
+            r[mc] == p.metric)
           fig.dat() << k << " \"" << combos[k].label() << "\" " << DatValue(r[mean]) << " "
                     << DatValue(r[lo]) << " " << DatValue(r[hi]) << " "
                     << role_color(combos[k].noise) << "\n";
@@ -255,20 +290,42 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   size_t longest = 8;
   for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
-  b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ": mean RMSE, 95 % CI of the mean (blue oracle, red tuned, grey hand)")
+  b << "  set multiplot layout " << panels.size() << ",1 title "
+    << Quote(sc.name + ": " + what + ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
     << "  set lmargin " << longest + 3 << "\n  unset key\n"
     << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
     << "  set cbrange [0:2]\n  unset colorbox\n";
-  for (size_t i = 0; i < states.size(); ++i)
-    b << "  set xlabel " << Quote(Label(sc.model->name, "mean RMSE " + states[i])) << "\n  plot "
-      << Quote(fig.dat_name()) << " index " << i
-      << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
+  for (size_t i = 0; i < panels.size(); ++i)
+    b << "  set xlabel " << Quote(panels[i].label) << "\n  plot " << Quote(fig.dat_name())
+      << " index " << i << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
   const int panel = 22 * int(combos.size()) + 90;
-  scripts->push_back(fig.Write(term, 900, panel * int(states.size()) + 40));
+  scripts->push_back(fig.Write(term, 900, panel * int(panels.size()) + 40));
+}
+
+// The MeansFigures of a scenario: RMSE with truth; prediction RMSE and NLL
+// per step on recorded data.
+void MeansFigures(const StudyConfig& c, const ScenarioConfig& sc,
+                  const std::vector<ComboName>& combos, const CsvText& summary,
+                  const std::string& folder, const std::string& term,
+                  std::vector<std::string>* scripts) {
+  const std::string& model = sc.model->name;
+  if (sc.has_truth) {
+    std::vector<MeanPanel> panels;
+    for (const auto& s : sc.model->states)
+      panels.push_back({"rmse_" + s, Label(model, "mean RMSE " + s)});
+    MeansFigure(c, sc, combos, summary, panels, "rmse_means", "mean RMSE", folder, term, scripts);
+  }
+  if (!sc.recorded) return;
+  std::vector<MeanPanel> panels;
+  for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+    panels.push_back({"pred_rmse_" + o, Label(model, "one-step prediction RMSE " + o)});
+  MeansFigure(c, sc, combos, summary, panels, "pred_rmse_means", "one-step prediction RMSE", folder,
+              term, scripts);
+  MeansFigure(c, sc, combos, summary, {{"nll_per_step", "NLL per step"}}, "nll_means",
+              "innovation NLL per step", folder, term, scripts);
 }
 
 // The filters' own standard deviation sqrt(P_ii) over time in one kept run
@@ -306,15 +363,7 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
     << Quote(sc.name + ", run " + std::to_string(run) +
              ": filter standard deviation sqrt(P) over time (log scale)")
     << "\n  set logscale y\n";
-  for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote(Label(sc.model->name, "sd " + states[i])) << "\n"
-      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
-    for (size_t j = 0; j < blocks.size(); ++j)
-      b << (j ? ", \\\n       " : "") << Quote(fig.dat_name()) << " index " << j
-        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
-    b << "\n";
-  }
+  StatePanels(sc, combos, blocks, "sd ", &fig);
   b << "  unset multiplot\n";
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
 }
@@ -384,7 +433,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
   if (state.status != "complete")
     throw InputError("the study in '" + dir + "' is " + state.status +
                      "; finish it first (run its estlab study command again)");
-  const StudyConfig config = LoadStudyConfig(dir + "/config.ini");
+  const StudyConfig config = LoadResultsConfig(dir, state);
   const CsvText summary = ReadCsvText(dir + "/summary.csv");
   const CsvText tm = ReadCsvText(dir + "/time_metrics.csv");
 
@@ -421,7 +470,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
       }
     }
     TimeFigures(sc, combos, tm, out.folder, term, &out.scripts);
-    MeansFigure(config, sc, combos, summary, out.folder, term, &out.scripts);
+    MeansFigures(config, sc, combos, summary, out.folder, term, &out.scripts);
   }
   SweepFigures(config, summary, out.folder, term, &out.scripts);
 

@@ -8,6 +8,9 @@
 //   SCEN_rmse_time                   RMSE over time across the runs, per state
 //   SCEN_nees_nis                    mean NEES and NIS over time with 95 % bounds
 //   SCEN_rmse_means                  mean RMSE per filter x noise with 95 % CI of the mean
+// and on recorded data (no truth: no RMSE figures, NIS without NEES):
+//   SCEN_pred_rmse_means             one-step prediction RMSE per output, 95 % CI
+//   SCEN_nll_means                   innovation NLL per step, 95 % CI
 //
 // Usage:
 //   FiguresSummary f = DrawStudyFigures("results/paper002", FiguresOptions{});

@@ -10,26 +10,11 @@
 #include <sstream>
 
 #include "src/core/types.h"
+#include "studies/study_report_parts.h"
 
 namespace estlab {
 
-namespace {
-
-std::string Sig(double v, int digits = 4) {
-  if (std::isnan(v)) return "–";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string GroupKey(const std::string& s, const std::string& f, const std::string& n) {
-  return s + "/" + f + "/" + n;
-}
-
-const GroupValues* FindGroup(const StudyTables& t, const std::string& key) {
-  const auto it = t.groups.find(key);
-  return it == t.groups.end() ? nullptr : &it->second;
-}
+namespace study_report {
 
 std::vector<double> Values(const GroupValues* g, const std::string& metric) {
   if (!g) return {};
@@ -44,16 +29,21 @@ std::vector<double> Values(const GroupValues* g, const std::string& metric) {
   return it == g->values.end() ? std::vector<double>{} : it->second;
 }
 
+std::string MeanCell(const MetricStats& s) {
+  if (s.n == 0) return "–";
+  return Sig(s.mean) + " ± " + Sig(s.std, 2) + " [" + Sig(s.ci95_lo) + ", " + Sig(s.ci95_hi) + "]";
+}
+
+}  // namespace study_report
+
+namespace {
+
+using namespace study_report;
+
 const char* TableTitle(const std::string& kind) {
   if (kind == "mse") return "MSE (mean squared error, the square of the RMSE)";
   if (kind == "mae") return "MAE (mean absolute error)";
   return "RMSE";
-}
-
-// "0.1734 ± 0.045 [0.1646, 0.1822]"
-std::string MeanCell(const MetricStats& s) {
-  if (s.n == 0) return "–";
-  return Sig(s.mean) + " ± " + Sig(s.std, 2) + " [" + Sig(s.ci95_lo) + ", " + Sig(s.ci95_hi) + "]";
 }
 
 std::string ParamsText(const ScenarioConfig& sc) {
@@ -82,7 +72,10 @@ std::string DiagText(const std::vector<double>& a, int n) {
   return (diagonal ? "diag" : "matrix with diagonal ") + VectorText(d);
 }
 
-int MeasurementsPerRun(const ScenarioConfig& sc) { return sc.steps + (sc.measure_at_t0 ? 1 : 0); }
+// The updates a run's mean NIS averages (the longest file, after the burn-in, on recorded data).
+int MeasurementsPerRun(const ScenarioConfig& sc) {
+  return sc.steps + (sc.measure_at_t0 ? 1 : 0) - sc.burn_in;
+}
 
 bool Matches(const std::string& pattern, const ScenarioConfig& sc) {
   return pattern == "*" || pattern == sc.name || "scenario." + pattern == sc.section;
@@ -98,10 +91,15 @@ void TunedTable(std::ostringstream& md, const StudyTables& t, const ScenarioConf
   std::string oracle_q =
       sc.oracle_q_white_accel ? "qc " + FormatNumber(sc.oracle_qc) : DiagText(sc.oracle_q, n);
   const int m = int(sc.truth.meas_noise_var.size());
-  md << "\nTuned noise (maximum innovation likelihood on the scenario's own tuning "
-        "trajectories, then fixed for every run); the truth has Q "
-     << oracle_q << ", R " << DiagText(sc.oracle_r, m) << ":\n\n"
-     << "| filter | noise | status | Q | R | NLL start → tuned | iterations |\n"
+  if (sc.recorded)
+    md << "\nTuned noise (maximum innovation likelihood on the scenario's " << sc.tune_runs.size()
+       << " tune-data files, then fixed for every run; recorded data: the true noise is "
+          "unknown):\n\n";
+  else
+    md << "\nTuned noise (maximum innovation likelihood on the scenario's own tuning "
+          "trajectories, then fixed for every run); the truth has Q "
+       << oracle_q << ", R " << DiagText(sc.oracle_r, m) << ":\n\n";
+  md << "| filter | noise | status | Q | R | NLL start → tuned | iterations |\n"
      << "|---|---|---|---|---|---|---|\n";
   const int f = tu.Column("filter"), no = tu.Column("noise"), st = tu.Column("status");
   const int qc = tu.Column("qc"), q = tu.Column("q"), r = tu.Column("r");
@@ -136,17 +134,23 @@ void ScenarioSection(std::ostringstream& md, const StudyConfig& c, const StudyTa
   const int nz = int(meas.outputs.size());
   md << "## Scenario `" << sc.name << "`\n\n";
   md << "- model `" << sc.model->name << "` (" << ParamsText(sc) << ")\n";
-  md << "- truth: " << sc.truth_description << "; x0 = " << VectorText(sc.truth.x0)
-     << (sc.sample_x0 ? " + a draw from N(0, P0) per run" : "") << "\n";
-  md << "- measurement `" << meas.name << "` every dt = " << FormatNumber(sc.truth.dt) << " for "
-     << sc.steps << " steps, "
-     << (sc.poisson_meas ? "Poisson counts with lambda " + VectorText(sc.poisson_lambda)
-                         : "noise variance " + VectorText(sc.truth.meas_noise_var))
-     << "\n";
+  if (sc.recorded) {
+    md << "- data: " << sc.truth_description << " (one run each, up to " << sc.steps
+       << " rows), measurement `" << meas.name << "`, median dt = " << FormatNumber(sc.truth.dt)
+       << "\n";
+  } else {
+    md << "- truth: " << sc.truth_description << "; x0 = " << VectorText(sc.truth.x0)
+       << (sc.sample_x0 ? " + a draw from N(0, P0) per run" : "") << "\n";
+    md << "- measurement `" << meas.name << "` every dt = " << FormatNumber(sc.truth.dt) << " for "
+       << sc.steps << " steps, "
+       << (sc.poisson_meas ? "Poisson counts with lambda " + VectorText(sc.poisson_lambda)
+                           : "noise variance " + VectorText(sc.truth.meas_noise_var))
+       << "\n";
+  }
   md << "- filter prior x0 = " << VectorText(sc.prior_x0) << ", P0 = " << DiagText(sc.prior_p0, nx)
      << "\n\n";
 
-  for (const std::string& kind : c.tables) {
+  for (const std::string& kind : sc.has_truth ? c.tables : std::vector<std::string>{}) {
     std::string upper = kind;
     for (char& ch : upper) ch = char(std::toupper(static_cast<unsigned char>(ch)));
     md << TableTitle(kind)
@@ -352,6 +356,7 @@ double Score(const StudyTables& t, const ScenarioConfig& sc, const std::string& 
 void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t) {
   std::vector<CompareCase> cases;
   for (const ScenarioConfig& sc : c.scenarios) {
+    if (!sc.has_truth) continue;  // no RMSE: RecordedDataSection compares them
     for (size_t fi = 0; fi < c.filters.size(); ++fi) {
       std::vector<const Combo*> hands, tuneds, oracles;
       for (const Combo& cb : sc.combos) {
@@ -685,11 +690,17 @@ std::string StudyReportMarkdown(const StudyConfig& c, const StudyTables& t,
        << (built_in ? " (cited in estlab's docs/paper" + c.paper + ".md)" : std::string())
        << ".\n\n";
   }
-  md << state.runs << " Monte Carlo runs per scenario (study seed " << c.study.seed
-     << "; run i of scenario s uses seed DeriveSeed({seed, s, i})), " << c.scenarios.size()
-     << " scenario(s), " << c.filters.size() << " filter(s), " << c.noises.size()
-     << " noise setting(s). Status: " << state.status << "; wall time " << Sig(state.wall_s, 3)
-     << " s with " << state.jobs << " worker thread(s).\n\n";
+  long recorded = 0;
+  for (const auto& sc : c.scenarios) recorded += sc.recorded;
+  if (recorded == long(c.scenarios.size()))
+    md << "Recorded data: one run per recorded file, nothing simulated, ";
+  else
+    md << state.runs << " Monte Carlo runs per scenario (study seed " << c.study.seed
+       << "; run i of scenario s uses seed DeriveSeed({seed, s, i})"
+       << (recorded ? "; a scenario on recorded data has one run per file" : "") << "), ";
+  md << c.scenarios.size() << " scenario(s), " << c.filters.size() << " filter(s), "
+     << c.noises.size() << " noise setting(s). Status: " << state.status << "; wall time "
+     << Sig(state.wall_s, 3) << " s with " << state.jobs << " worker thread(s).\n\n";
   md << "Filters:\n\n";
   for (const auto& f : c.filters) md << "- `" << f.name << "`: " << f.description << "\n";
   md << "\nNoise settings (Q = process noise, R = measurement noise; oracle = the truth's):\n\n";
@@ -700,6 +711,7 @@ std::string StudyReportMarkdown(const StudyConfig& c, const StudyTables& t,
   OverviewSection(md, c, t);
   ReferenceSection(md, c, t);
   HandAutoOracleSection(md, c, t);
+  study_report::RecordedDataSection(md, c, t);
   ClaimsSection(md, c, t);
   if (!c.notes.empty()) {
     md << "## Notes\n\n";

@@ -25,9 +25,14 @@ std::vector<std::string> RunsColumns(const StudyConfig& config) {
   std::vector<std::string> c = {"scenario", "filter", "noise", "run", "seed", "status"};
   for (const auto& s : config.state_columns) c.push_back("rmse_" + s);
   for (const auto& s : config.state_columns) c.push_back("mae_" + s);
-  for (const char* m :
-       {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik", "steps", "message"})
-    c.push_back(m);
+  for (const char* m : {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik"}) c.push_back(m);
+  // Studies with recorded scenarios: the metrics that need no truth.
+  if (!config.output_columns.empty()) {
+    for (const char* m : {"nll_per_step", "nis_lo95", "nis_hi95"}) c.push_back(m);
+    for (const auto& o : config.output_columns) c.push_back("pred_rmse_" + o);
+  }
+  c.push_back("steps");
+  c.push_back("message");
   return c;
 }
 
@@ -199,6 +204,13 @@ RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& col
 
 // ---------------------------------------------------------------------------
 
+StudyConfig LoadResultsConfig(const std::string& dir, const StudyState& state) {
+  const std::string copy = dir + "/config.ini";
+  const bool original_folder =
+      !state.config_path.empty() && fs::is_directory(fs::path(state.config_path).parent_path());
+  return ParseStudyConfig(ReadAll(copy), original_folder ? state.config_path : copy);
+}
+
 void WriteStudyState(const std::string& dir, const StudyState& s) {
   char hash[32];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(s.config_hash));
@@ -208,6 +220,7 @@ void WriteStudyState(const std::string& dir, const StudyState& s) {
       << s.shards << "\nstatus = " << s.status << "\nstarted = " << s.started
       << "\nfinished = " << s.finished << "\nwall-s = " << Num(s.wall_s) << "\njobs = " << s.jobs
       << "\n";
+  if (!s.config_path.empty()) out << "config-path = " << s.config_path << "\n";
   WriteTextFile(dir + "/study.state", out.str());
 }
 
@@ -233,6 +246,7 @@ bool ReadStudyState(const std::string& dir, StudyState* s) {
     s->finished = kv["finished"];
     s->wall_s = kv["wall-s"].empty() ? 0.0 : std::stod(kv["wall-s"]);
     s->jobs = kv["jobs"].empty() ? 1 : std::stoi(kv["jobs"]);
+    s->config_path = kv["config-path"];
   } catch (const std::exception&) {
     throw InputError(path + ": damaged study state file");
   }
@@ -433,6 +447,11 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
       for (const auto& st : sc.model->states) metrics.push_back("mae_" + st);
       for (const char* m : {"mean_nees", "mean_nis", "nees_in95", "nis_in95", "loglik"})
         metrics.push_back(m);
+      if (sc.recorded) {
+        for (const char* m : {"nll_per_step", "nis_lo95", "nis_hi95"}) metrics.push_back(m);
+        for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+          metrics.push_back("pred_rmse_" + o);
+      }
       for (const Combo& cb : sc.combos) {
         const std::string& f = config.filters[cb.filter].name;
         const std::string& n = config.noises[cb.noise].name;
@@ -496,7 +515,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
           for (size_t i = 0; i < ns; ++i) {
             const bool has = std::find(sc.model->states.begin(), sc.model->states.end(),
                                        config.state_columns[i]) != sc.model->states.end();
-            row.push_back(has ? Num(std::sqrt(a.sq[i] / double(a.n))) : "");
+            row.push_back(has && sc.has_truth ? Num(std::sqrt(a.sq[i] / double(a.n))) : "");
           }
           // Bounds of the average over N runs at one time: N * mean ~ chi2(N dim).
           double b[2];
@@ -535,7 +554,7 @@ void MergeStudies(const std::string& out, const std::vector<std::string>& shard_
                        "' is not a study results folder (no study.state)");
   }
   const std::string config_text = ReadAll(shard_dirs[0] + "/config.ini");
-  const StudyConfig config = ParseStudyConfig(config_text, shard_dirs[0] + "/config.ini");
+  const StudyConfig config = LoadResultsConfig(shard_dirs[0], states[0]);
   const StudyState& first = states[0];
   if (ConfigHash(config_text) != first.config_hash)
     throw InputError("merge: " + shard_dirs[0] + "/config.ini does not match its study.state");

@@ -63,10 +63,18 @@ struct StudyState {
   std::string started, finished;
   double wall_s = 0.0;
   int jobs = 1;
+  // The absolute path of the config file the study was started from: the
+  // folder that relative paths in it (model files, data) are relative to.
+  std::string config_path;
 };
 void WriteStudyState(const std::string& dir, const StudyState& state);
 // Returns false when DIR has no study.state.
 bool ReadStudyState(const std::string& dir, StudyState* state);
+
+// The configuration of a results folder: DIR/config.ini, read as if it were
+// the original config file (state.config_path, when that folder still
+// exists) so that its relative model and data paths resolve as they did.
+StudyConfig LoadResultsConfig(const std::string& dir, const StudyState& state);
 
 // Per-group statistics of one metric over the runs whose status is ok.
 struct MetricStats {

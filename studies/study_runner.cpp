@@ -5,6 +5,7 @@
 #include <ceres/version.h>
 #include <sundials/sundials_config.h>
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <boost/version.hpp>
 #include <chrono>
 #include <cmath>
@@ -28,6 +29,7 @@
 #include "src/core/types.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "studies/study_metrics.h"
 
 namespace fs = std::filesystem;
 
@@ -135,8 +137,10 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
     for (int i = 0; i < n; ++i) {
       const double est = r[Column(out.columns, states[i] + "_est")];
       const double sd = std::sqrt(std::max(0.0, r[Column(out.columns, states[i] + "_var")]));
-      os << "," << Full(data.truth[k * n + i]) << "," << Full(est) << "," << Full(est - 2 * sd)
-         << "," << Full(est + 2 * sd) << "," << Full(r[Column(out.columns, states[i] + "_err")]);
+      const double true_value = data.has_truth ? data.truth[k * n + i] : NAN;
+      os << "," << Full(true_value) << "," << Full(est) << "," << Full(est - 2 * sd) << ","
+         << Full(est + 2 * sd) << ","
+         << Full(data.has_truth ? r[Column(out.columns, states[i] + "_err")] : NAN);
     }
     os << "," << Full(nees_c >= 0 ? r[nees_c] : NAN) << "," << Full(nis_c >= 0 ? r[nis_c] : NAN)
        << "\n";
@@ -167,6 +171,40 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
   return data;
 }
 
+// The runs.csv fields of the metrics that need no truth (study_metrics.h):
+// nll_per_step, nis_lo95, nis_hi95, pred_rmse_OUTPUT for every output column
+// of the study (empty where this scenario's measurement has no such output).
+void AppendNoTruthMetrics(const StudyConfig& c, const ScenarioConfig& sc, bool ran,
+                          const NoTruthMetrics& m, std::vector<std::string>* row) {
+  const auto& outputs = sc.model->FindMeasurement(sc.truth.measurement).outputs;
+  row->push_back(ran ? Full(m.nll_per_step) : "");
+  row->push_back(ran ? Full(m.nis_bounds95[0]) : "");
+  row->push_back(ran ? Full(m.nis_bounds95[1]) : "");
+  for (const auto& o : c.output_columns) {
+    const auto it = std::find(outputs.begin(), outputs.end(), o);
+    row->push_back(ran && it != outputs.end() ? Full(m.pred_rmse[size_t(it - outputs.begin())])
+                                              : "");
+  }
+}
+
+// Run `run` of a scenario: its simulated truth and measurements, or its
+// recorded file. Sets *truth_error when the truth could not be simulated.
+FilterData RunData(const ScenarioConfig& sc, int run, uint64_t seed, SimulationResult* truth,
+                   std::string* truth_error) {
+  if (sc.recorded) return sc.data_runs[size_t(run)];
+  SimulationSpec sim = sc.truth;
+  sim.seed = seed;
+  if (sc.sample_x0) sim.x0 = SampleX0(sc, seed);
+  try {
+    *truth = sc.model->simulate(sim);
+    if (!truth->ok) *truth_error = "truth simulation failed: " + truth->error;
+  } catch (const std::exception& e) {
+    *truth_error = std::string("truth simulation failed: ") + e.what();
+  }
+  if (!truth_error->empty()) return FilterData{};
+  return DataFromTruth(sc, *truth, "scenario " + sc.name + " run " + std::to_string(run), seed);
+}
+
 RunText RunOne(const RunContext& ctx, int s, int run) {
   const StudyConfig& c = *ctx.config;
   const ScenarioConfig& sc = c.scenarios[s];
@@ -174,21 +212,9 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
   const uint64_t seed = DeriveSeed({c.study.seed, uint64_t(s), uint64_t(run)});
   const auto& states = model.states;
 
-  SimulationSpec sim = sc.truth;
-  sim.seed = seed;
-  if (sc.sample_x0) sim.x0 = SampleX0(sc, seed);
   SimulationResult truth;
   std::string truth_error;
-  try {
-    truth = model.simulate(sim);
-    if (!truth.ok) truth_error = "truth simulation failed: " + truth.error;
-  } catch (const std::exception& e) {
-    truth_error = std::string("truth simulation failed: ") + e.what();
-  }
-
-  FilterData data;
-  if (truth_error.empty())
-    data = DataFromTruth(sc, truth, "scenario " + sc.name + " run " + std::to_string(run), seed);
+  const FilterData data = RunData(sc, run, seed, &truth, &truth_error);
 
   RunText text;
   for (const Combo& cb : sc.combos) {
@@ -235,11 +261,19 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     auto inside = [](double v, const double b[2]) {
       return std::isfinite(v) ? std::string(v >= b[0] && v <= b[1] ? "1" : "0") : std::string();
     };
+    // Recorded runs: the NIS after the scenario's burn-in (the prior's transient).
+    NoTruthMetrics no_truth;
+    if (!c.output_columns.empty())
+      no_truth = ComputeNoTruthMetrics(out, model.FindMeasurement(sc.truth.measurement).outputs,
+                                       sc.burn_in);
+    const double mean_nis = sc.recorded ? no_truth.mean_nis : sum.mean_nis;
+    const double* nis_bounds = sc.recorded ? no_truth.nis_bounds95 : sum.nis_bounds95;
     row.push_back(ran ? Full(sum.mean_nees) : "");
-    row.push_back(ran ? Full(sum.mean_nis) : "");
+    row.push_back(ran ? Full(mean_nis) : "");
     row.push_back(ran ? inside(sum.mean_nees, sum.nees_bounds95) : "");
-    row.push_back(ran ? inside(sum.mean_nis, sum.nis_bounds95) : "");
+    row.push_back(ran ? inside(mean_nis, nis_bounds) : "");
     row.push_back(ran ? Full(sum.loglik) : "");
+    if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
     row.push_back(std::to_string(sum.steps));
     row.push_back(message);
     text.runs += FormatCsvRow(row);
@@ -315,7 +349,8 @@ std::string TuneNoise(StudyConfig* config, int jobs) {
       Combo& cb = sc.combos[job_list[j].c];
       std::vector<FilterData> datasets;
       std::string failure;
-      for (int k = 0; k < cb.tune_datasets && failure.empty(); ++k) {
+      if (sc.recorded) datasets = sc.tune_runs;
+      for (int k = 0; k < cb.tune_datasets && failure.empty() && !sc.recorded; ++k) {
         SimulationSpec sim = sc.truth;
         sim.seed = DeriveSeed({config->study.seed, uint64_t(s), kTuneSeedTag, uint64_t(k)});
         if (sc.sample_x0) sim.x0 = SampleX0(sc, sim.seed);
@@ -535,6 +570,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   state.shards = options.shards;
   state.status = "running";
   state.jobs = jobs;
+  state.config_path = fs::absolute(config.path).lexically_normal().string();
   if (!resuming || state.started.empty()) state.started = NowUtc();
   const double previous_wall = resuming ? state.wall_s : 0.0;
   state.finished.clear();
@@ -548,7 +584,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
     std::map<std::pair<std::string, long>, size_t> count;
     for (const auto& r : f.rows) ++count[{r[0], std::stol(r[3])}];
     for (const auto& sc : config.scenarios)
-      for (long i = 0; i < runs; ++i) {
+      for (long i = 0; i < ScenarioRuns(sc, runs); ++i) {
         const auto it = count.find({sc.name, i});
         if (it != count.end() && it->second == sc.combos.size() &&
             i % options.shards == options.shard - 1)
@@ -565,7 +601,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   std::vector<Task> tasks;
   long total = 0;
   for (size_t s = 0; s < config.scenarios.size(); ++s)
-    for (int i = 0; i < runs; ++i) {
+    for (int i = 0; i < ScenarioRuns(config.scenarios[s], runs); ++i) {
       if (i % options.shards != options.shard - 1) continue;
       ++total;
       if (!finished.count({config.scenarios[s].name, i})) tasks.push_back({int(s), i});

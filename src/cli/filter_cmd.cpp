@@ -36,7 +36,8 @@ constexpr const char* kExamples = R"(Examples:
 
 Data: a CSV with a 't' column and one 'z_<output>' column per output of the
 measurement (what 'estlab simulate --measure' writes); --column ours=theirs maps
-other names. Columns named like the states are the truth: when all are present
+other names, --column ours=[a*]theirs[+-b] also converts (theta=angle-pi,
+theta=0.0174533*angle_deg; a and b numbers or pi). Columns named like the states are the truth: when all are present
 the errors, RMSE/MAE and NEES are computed. An empty or NaN measurement cell
 means no update at that time. Models with an input read a 'u' column if present
 (else --input). The prior holds at --t0 (default: the first row's time).

@@ -1,6 +1,7 @@
 // estlab study | merge | figures: Monte Carlo studies from a config file.
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <boost/program_options.hpp>
 #include <cstdio>
@@ -26,7 +27,8 @@ namespace {
 constexpr const char* kStudyHelp = R"(
 Runs every scenario of CONFIG (a studies/*.ini file, format in docs/studies.md)
 N times: each run simulates the truth once and runs every filter x noise
-setting on the same measurements.
+setting on the same measurements. A scenario with `data = FILES` runs on
+recorded files instead, one run per file (docs/studies.md, "Recorded data").
 
 Examples:
   estlab study studies/paper002_pendulum_mc.ini --out results/paper002 --jobs 2
@@ -35,6 +37,7 @@ Examples:
   estlab study S.ini --out r1 --shard 1/3   (and 2/3, 3/3 into r2, r3)
   estlab merge results/all r1 r2 r3
   estlab figures results/paper002
+  estlab study studies/multiarm_hand_vs_auto.ini --out results/multiarm --jobs 2
 
 Output folder: runs.csv (a row per scenario, run, filter and noise setting),
 summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
@@ -86,23 +89,32 @@ void ParseShard(const std::string& text, int* k, int* n) {
   }
 }
 
-// A short table of summary.csv: mean RMSE per state, NEES and NIS per group.
+// A short table of summary.csv: per group the mean RMSE per state, NEES and
+// NIS (on recorded data, NIS, NLL per step and prediction RMSE: the metrics
+// that need no truth); metrics without a value are left out.
 void PrintSummaryTable(const std::string& dir) {
   const CsvText s = ReadCsvText(dir + "/summary.csv");
   const int metric = s.Column("metric"), mean = s.Column("mean"), n = s.Column("n");
   const int runs = s.Column("runs"), lo = s.Column("ci95_lo"), hi = s.Column("ci95_hi");
+  auto group_of = [](const std::vector<std::string>& r) { return r[0] + "  " + r[1] + "/" + r[2]; };
   std::string group;
-  for (const auto& r : s.rows) {
-    const std::string g = r[0] + "  " + r[1] + "/" + r[2];
+  for (size_t i = 0; i < s.rows.size(); ++i) {
+    const auto& r = s.rows[i];
+    const std::string g = group_of(r);
     if (g != group) {
-      std::cout << (group.empty() ? "" : "\n") << g << "  (" << r[n] << "/" << r[runs]
+      long ok = 0;  // the ok runs: the most values any metric of the group has
+      for (size_t j = i; j < s.rows.size() && group_of(s.rows[j]) == g; ++j)
+        ok = std::max(ok, std::stol(s.rows[j][n]));
+      std::cout << (group.empty() ? "" : "\n") << g << "  (" << ok << "/" << r[runs]
                 << " runs ok)\n";
       group = g;
     }
     const std::string& m = r[metric];
     // The numbers of summary.csv, formatted (6 significant digits), never cut.
     const auto number = CellForDisplay;
-    if (m.rfind("rmse_", 0) == 0 || m == "mean_nees" || m == "mean_nis")
+    const bool shown = m.rfind("rmse_", 0) == 0 || m.rfind("pred_rmse_", 0) == 0 ||
+                       m == "mean_nees" || m == "mean_nis" || m == "nll_per_step";
+    if (shown && r[n] != "0")
       std::cout << "  " << std::left << std::setw(16) << m << std::right << std::setw(12)
                 << number(r[mean]) << "   95% CI [" << number(r[lo]) << ", " << number(r[hi])
                 << "]\n";
@@ -146,7 +158,8 @@ int RunStudyCommand(const std::vector<std::string>& args) {
                                             "study file (studies/*.ini)")(
       "out", po::value<std::string>(),
       "results folder (created; an existing one of the same study is resumed)")(
-      "runs", po::value<int>(), "Monte Carlo runs per scenario (overrides [study] runs)")(
+      "runs", po::value<int>(),
+      "Monte Carlo runs per scenario (overrides [study] runs; not for recorded data)")(
       "jobs", po::value<int>(), "worker threads (overrides [study] jobs)")(
       "shard", po::value<std::string>(), "k/N: only runs i with i % N == k-1")(
       "quiet", "no progress output")("json", "print a JSON summary on stdout");

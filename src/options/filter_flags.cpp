@@ -61,16 +61,9 @@ FilterSpec BuildFilterSpec(const po::variables_map& vm, const ModelEntry& model,
   return estlab::BuildFilterSpec(SettingsFromVariablesMap(vm, np), model);
 }
 
-std::vector<std::pair<std::string, std::string>> ParseColumnRenames(const po::variables_map& vm) {
-  std::vector<std::pair<std::string, std::string>> out;
-  if (!vm.count("column")) return out;
-  for (const auto& item : vm["column"].as<std::vector<std::string>>()) {
-    const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
-      throw InputError("--column: expected ours=theirs, got '" + item + "'");
-    out.emplace_back(item.substr(0, eq), item.substr(eq + 1));
-  }
-  return out;
+std::vector<ColumnMap> ParseColumnRenames(const po::variables_map& vm) {
+  if (!vm.count("column")) return {};
+  return ParseColumnMaps(vm["column"].as<std::vector<std::string>>());
 }
 
 void CheckCovariance(const std::vector<double>& a, int n, const std::string& what,
@@ -133,65 +126,81 @@ void MergeConfigFiles(po::variables_map* vm, const std::string& np) {
   }
 }
 
+namespace {
+
+// Where one of our columns comes from: a column of the file and its affine map.
+struct Source {
+  int column = -1;   // -1: absent
+  std::string name;  // the file's column name
+  double scale = 1.0, offset = 0.0;
+  double Read(const std::vector<double>& row) const { return scale * row[column] + offset; }
+};
+
+Source FindSource(const CsvTable& table, const std::vector<ColumnMap>& maps,
+                  const std::string& ours) {
+  Source s;
+  s.name = ours;
+  for (const ColumnMap& m : maps) {
+    if (m.ours != ours) continue;
+    s.name = m.theirs;
+    s.scale = m.scale;
+    s.offset = m.offset;
+  }
+  s.column = table.ColumnIndex(s.name);
+  return s;
+}
+
+// "PATH:LINE: column C ('NAME'): "
+std::string Where(const std::string& path, long line, const Source& s) {
+  return path + ":" + std::to_string(line) + ": column " + std::to_string(s.column + 1) + " ('" +
+         s.name + "'): ";
+}
+
+}  // namespace
+
 FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
-                          const MeasurementDesc& meas,
-                          const std::vector<std::pair<std::string, std::string>>& renames) {
+                          const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
+                          bool read_truth) {
   const CsvTable table = ReadCsv(path);
-  auto column = [&](const std::string& ours) {
-    std::string name = ours;
-    for (const auto& [a, b] : renames)
-      if (a == ours) name = b;
-    return table.ColumnIndex(name);
-  };
-  auto column_name = [&](const std::string& ours) {
-    for (const auto& [a, b] : renames)
-      if (a == ours) return b;
-    return ours;
-  };
+  auto source = [&](const std::string& ours) { return FindSource(table, columns, ours); };
   FilterData data;
   data.path = path;
-  const int tc = column("t");
-  if (tc < 0) throw InputError(path + ": no '" + column_name("t") + "' (time) column");
-  std::vector<int> zc;
+  const Source tc = source("t");
+  if (tc.column < 0) throw InputError(path + ": no '" + tc.name + "' (time) column");
+  std::vector<Source> zc;
   for (const auto& o : meas.outputs) {
-    const int c = column("z_" + o);
-    if (c < 0) {
-      throw InputError(path + ": no measurement column '" + column_name("z_" + o) +
-                       "' for output '" + o + "' of measurement '" + meas.name +
-                       "' (map another column with --column z_" + o + "=NAME)");
+    zc.push_back(source("z_" + o));
+    if (zc.back().column < 0) {
+      throw InputError(path + ": no measurement column '" + zc.back().name + "' for output '" + o +
+                       "' of measurement '" + meas.name + "' (map another column with --column z_" +
+                       o + "=NAME)");
     }
-    zc.push_back(c);
   }
-  std::vector<int> sc;
-  for (const auto& s : model.states) sc.push_back(column(s));
+  std::vector<Source> sc;
+  for (const auto& s : model.states) sc.push_back(source(s));
   int present = 0;
-  for (int c : sc) present += c >= 0;
-  data.has_truth = present == int(sc.size());
-  const int uc = model.has_input ? column("u") : -1;
-  data.has_input = uc >= 0;
+  for (const Source& s : sc) present += s.column >= 0;
+  data.has_truth = read_truth && present == int(sc.size());
+  const Source uc = model.has_input ? source("u") : Source{};
+  data.has_input = uc.column >= 0;
   data.m = int(meas.outputs.size());
   const int n = int(model.states.size());
   for (size_t k = 0; k < table.rows.size(); ++k) {
     const auto& row = table.rows[k];
     const long line = table.line_numbers[k];
-    const double t = row[tc];
-    if (!std::isfinite(t))
-      throw InputError(path + ":" + std::to_string(line) + ": column " + std::to_string(tc + 1) +
-                       " ('t'): missing time");
+    const double t = tc.Read(row);
+    if (!std::isfinite(t)) throw InputError(Where(path, line, tc) + "missing time");
     if (!data.t.empty() && t < data.t.back())
-      throw InputError(path + ":" + std::to_string(line) + ": column " + std::to_string(tc + 1) +
-                       " ('t'): time goes backwards (" + FormatNumber(t) + " after " +
-                       FormatNumber(data.t.back()) + ")");
+      throw InputError(Where(path, line, tc) + "time goes backwards (" + FormatNumber(t) +
+                       " after " + FormatNumber(data.t.back()) + ")");
     data.t.push_back(t);
     data.lines.push_back(line);
-    for (int c : zc) data.z.push_back(row[c]);
+    for (const Source& z : zc) data.z.push_back(z.Read(row));
     if (data.has_truth)
-      for (int i = 0; i < n; ++i) data.truth.push_back(row[sc[i]]);
+      for (int i = 0; i < n; ++i) data.truth.push_back(sc[i].Read(row));
     if (data.has_input) {
-      if (!std::isfinite(row[uc]))
-        throw InputError(path + ":" + std::to_string(line) + ": column " + std::to_string(uc + 1) +
-                         " ('u'): missing input");
-      data.u.push_back(row[uc]);
+      if (!std::isfinite(row[uc.column])) throw InputError(Where(path, line, uc) + "missing input");
+      data.u.push_back(uc.Read(row));
     }
   }
   if (data.t.empty()) throw InputError(path + ": no data rows");

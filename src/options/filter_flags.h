@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "src/options/column_map.h"
 #include "src/options/filter_settings.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
@@ -43,14 +44,17 @@ FilterSpec BuildFilterSpec(const boost::program_options::variables_map& vm, cons
                            const std::string& noise_prefix = "");
 
 // Reads a data CSV for `model` and measurement `meas`: column t, the
-// z_<output> columns (renamed by --column ours=theirs), truth columns named
-// like the states (optional, all or none), and 'u' for models with an input.
+// z_<output> columns, truth columns named like the states (optional, all or
+// none), and 'u' for models with an input. `columns` maps any of them from
+// another column, ours = a * theirs + b (column_map.h); missing values stay
+// missing. With read_truth false the state-named columns are not read (data
+// whose state-like columns are derived, not measured truth).
 FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
-                          const MeasurementDesc& meas,
-                          const std::vector<std::pair<std::string, std::string>>& renames);
+                          const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
+                          bool read_truth = true);
 
-std::vector<std::pair<std::string, std::string>> ParseColumnRenames(
-    const boost::program_options::variables_map& vm);
+// The --column maps of the command line (ParseColumnMaps).
+std::vector<ColumnMap> ParseColumnRenames(const boost::program_options::variables_map& vm);
 
 // Checks that the row-major n x n matrix is symmetric and positive definite
 // (or semi-definite when allow_semidefinite); throws InputError naming it.

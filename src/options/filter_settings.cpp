@@ -53,7 +53,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
       {"seed", "1", "pf: random seed", K::kValue, false, true},
       {"input", "0", "constant input when the data has no 'u' column", K::kValue, false, true},
-      {"column", nullptr, "map a column: ours=theirs, e.g. z_theta=angle_rad", K::kRepeatable, false, true},
+      {"column", nullptr, "map a column: ours=[a*]theirs[+-b] (ours = a theirs + b; a, b numbers or pi), e.g. z_theta=angle_rad, theta=angle-pi, theta=0.0174533*angle_deg", K::kRepeatable, false, true},
       {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
   };
   // clang-format on

@@ -1,0 +1,104 @@
+// Recorded-data scenarios (`data =`): the files, the column maps and whether
+// state-named columns are truth (study_config_parts.h).
+#include <glob.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "src/core/parse.h"
+#include "src/options/filter_flags.h"
+#include "studies/study_config_parts.h"
+
+namespace estlab::study_config {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The files of a `data` / `tune-data` value: comma-separated globs relative to
+// the config file's folder, each expanded in sorted order; one that matches
+// nothing is an error naming it.
+std::vector<std::string> ExpandFiles(const SectionValues& v, const std::string& key) {
+  const fs::path base = fs::path(v.errors().path()).parent_path();
+  std::vector<std::string> files;
+  for (const std::string& item : Split(v.Get(key)->text, ',')) {
+    if (item.empty()) v.Fail(key, "empty file name in '" + v.Get(key)->text + "'");
+    const fs::path pattern = fs::path(item).is_absolute() ? fs::path(item) : base / item;
+    glob_t g{};
+    const int rc = ::glob(pattern.string().c_str(), 0, nullptr, &g);
+    for (size_t i = 0; rc == 0 && i < g.gl_pathc; ++i)
+      files.push_back(fs::path(g.gl_pathv[i]).lexically_normal().string());
+    ::globfree(&g);
+    if (rc != 0)
+      v.Fail(key, "no file matches '" + item + "' (looked for " +
+                      pattern.lexically_normal().string() + ")");
+  }
+  return files;
+}
+
+std::vector<FilterData> LoadFiles(const SectionValues& v, const std::string& key,
+                                  const ScenarioConfig& sc) {
+  const MeasurementDesc& meas = sc.model->FindMeasurement(sc.truth.measurement);
+  std::vector<FilterData> runs;
+  for (const std::string& file : ExpandFiles(v, key)) {
+    runs.push_back(Checked(*v.Get(key), v.errors(), [&](const std::string&) {
+      return cli::LoadFilterData(file, *sc.model, meas, sc.columns, sc.has_truth);
+    }));
+    if (sc.has_truth && !runs.back().has_truth) {
+      std::string states;
+      for (const auto& s : sc.model->states) states += (states.empty() ? "" : ", ") + s;
+      v.Fail("truth", "'columns', but " + file + " has no column for every state (" + states +
+                          "; map them with column = STATE=NAME)");
+    }
+  }
+  return runs;
+}
+
+double MedianStep(const std::vector<double>& t) {
+  std::vector<double> d;
+  for (size_t k = 1; k < t.size(); ++k) d.push_back(t[k] - t[k - 1]);
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + long(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace
+
+void ReadRecordedData(const SectionValues& v, ScenarioConfig* sc) {
+  sc->recorded = true;
+  sc->has_truth = false;
+  if (v.Has("truth")) {
+    const std::string t = v.Get("truth")->text;
+    if (t != "none" && t != "columns") v.Fail("truth", "expected none or columns, got '" + t + "'");
+    sc->has_truth = t == "columns";
+  }
+  if (v.Has("column")) {
+    sc->columns = Checked(*v.Get("column"), v.errors(), [](const std::string& text) {
+      try {
+        return ParseColumnMaps(Split(text, ','));
+      } catch (const InputError& e) {  // "--column: ..." -> "column: ..."
+        const std::string m = e.what();
+        throw InputError(m.rfind("--", 0) == 0 ? m.substr(2) : m);
+      }
+    });
+  }
+  sc->data_runs = LoadFiles(v, "data", *sc);
+  if (v.Has("tune-data")) sc->tune_runs = LoadFiles(v, "tune-data", *sc);
+  if (v.Has("burn-in")) {
+    sc->burn_in = Checked(*v.Get("burn-in"), v.errors(),
+                          [](const std::string& t) { return int(ParseInteger(t, "burn-in", 0)); });
+    size_t shortest = sc->data_runs.front().t.size();
+    for (const FilterData& d : sc->data_runs) shortest = std::min(shortest, d.t.size());
+    if (size_t(sc->burn_in) >= shortest)
+      v.Fail("burn-in", "must be less than the rows of every data file (the shortest has " +
+                            std::to_string(shortest) + ")");
+  }
+  // For the report: the typical sampling interval and the longest run.
+  sc->truth.dt = MedianStep(sc->data_runs.front().t);
+  sc->steps = 0;
+  for (const FilterData& d : sc->data_runs) sc->steps = std::max(sc->steps, int(d.t.size()));
+  sc->truth_description = "recorded, " + std::to_string(sc->data_runs.size()) + " file(s)" +
+                          (sc->has_truth ? ", truth from the state columns" : ", no truth");
+}
+
+}  // namespace estlab::study_config
