@@ -121,6 +121,7 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required");
   if (!vm.count("out")) throw InputError("--out is required");
+  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   const FilterSpec spec = BuildFilterSpec(vm, model);
   const FilterData data =

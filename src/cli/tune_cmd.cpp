@@ -423,6 +423,9 @@ int RunTune(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required (one or more training files)");
+  if (vm.count("out"))
+    RefuseOutputOverInput("--out", vm["out"].as<std::string>(),
+                          InputFiles(vm, {"data", "validate", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = true});
   if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
