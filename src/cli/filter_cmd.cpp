@@ -40,7 +40,8 @@ other names, --column ours=[a*]theirs[+-b] also converts (theta=angle-pi,
 theta=0.0174533*angle_deg; a and b numbers or pi). Columns named like the states are the truth: when all are present
 the errors, RMSE/MAE and NEES are computed. An empty or NaN measurement cell
 means no update at that time. Models with an input read a 'u' column if present
-(else --input). The prior holds at --t0 (default: the first row's time).
+(else --input). The prior holds at --t0 (default: the first row's time; a --t0 later than
+the first row is refused).
 
 Output: est.csv with t, <state>_est, <state>_var, nu_<output>, nis, loglik
 [, <state>_err, nees]; a summary table on stdout, or JSON with --json.
@@ -127,6 +128,7 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   const FilterData data =
       LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
                      ParseColumnRenames(vm));
+  CheckPriorTime(spec, data);
   const std::string out_path = vm["out"].as<std::string>();
   OutputFile out(out_path);
   const FilterRunOutput result = model.run_filter(spec, data);

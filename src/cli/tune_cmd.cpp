@@ -212,6 +212,7 @@ Validation Validate(const po::variables_map& vm, const ModelEntry& model, const 
                      "' is not available");
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const FilterData data = LoadFilterData(v.path, model, meas, ParseColumnRenames(vm));
+  CheckPriorTime(spec, data);
   v.initial = model.run_filter(spec, data).summary;
   v.tuned = model.run_filter(result.tuned_spec, data).summary;
 
@@ -460,8 +461,10 @@ int RunTune(const std::vector<std::string>& args) {
 
   std::vector<FilterData> datasets;
   const auto renames = ParseColumnRenames(vm);
-  for (const auto& path : vm["data"].as<std::vector<std::string>>())
+  for (const auto& path : vm["data"].as<std::vector<std::string>>()) {
     datasets.push_back(LoadFilterData(path, model, meas, renames));
+    CheckPriorTime(spec, datasets.back());
+  }
   if (vm.count("validate") && model.run_filter == nullptr)
     throw InputError("--validate: the filter runner is not available");
   // Open the output first so an unwritable path fails before the work.

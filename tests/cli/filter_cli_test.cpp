@@ -36,7 +36,8 @@ TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
               "omega_err,nees");
   }
   // The human summary names RMSE per state.
-  const RunResult r = RunEstlab(std::string(kFilterArgs) + "--filter ukf --out est.csv", dir.path());
+  const RunResult r =
+      RunEstlab(std::string(kFilterArgs) + "--filter ukf --out est.csv", dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("RMSE"), std::string::npos);
   EXPECT_NE(r.out.find("theta"), std::string::npos);
@@ -81,7 +82,8 @@ TEST(FilterCli, BadInputExitsTwoNamingTheProblem) {
        "--q-diag"},
       {"filter --model pendulum --measure angle --data d.csv --q-diag 1,1 --r-diag 1 --out e.csv",
        "z_theta"},
-      {"filter --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out e.csv",
+      {"filter --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out "
+       "e.csv",
        "nothere.csv"},
       {base + "--filter bogus --out e.csv", "bogus"},
       {base + "--filter ukf --resample nope --out e.csv", "nope"},
@@ -105,6 +107,27 @@ TEST(FilterCli, BadInputExitsTwoNamingTheProblem) {
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
     EXPECT_FALSE(dir.Exists("e.csv")) << c.args;
   }
+}
+
+TEST(FilterCli, PriorTimeAfterTheFirstRowIsRefused) {
+  TempDir dir;
+  {
+    std::ofstream f(dir.File("late.csv"));
+    f << "t,z_sin_theta\n0.5,0.1\n0.6,0.1\n";
+  }
+  const std::string late = std::string(kFilterArgs) + "--out e.csv";
+  const std::string args =
+      late.substr(0, late.find("d.csv")) + "late.csv" + late.substr(late.find("d.csv") + 5);
+  RunResult r = RunEstlab(args + " --t0 0.7", dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("estlab: error: --t0 0.7 is later than the first data row (late.csv:2, "
+                       "t = 0.5)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(dir.Exists("e.csv"));
+  r = RunEstlab(args + " --t0 0.5", dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(dir.Exists("e.csv"));
 }
 
 TEST(FilterCli, DivergenceExitsOneAndKeepsRows) {

@@ -61,10 +61,13 @@ TEST(OutputSafetyCli, NonRegularOutputsAreWrittenInPlace) {
   TempDir dir;
   ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
   const std::string filter = std::string(kFilter) + "--data d.csv ";
-  // /dev/null: written directly (no temporary file in /dev), stays a device.
-  RunResult r = RunEstlab(filter + "--out /dev/null", dir.path());
+  // A device (through a link, so that a regressed build run as root replaces
+  // the link and not /dev/null itself): written directly, stays a device.
+  std::filesystem::create_symlink("/dev/null", dir.File("null.csv"));
+  RunResult r = RunEstlab(filter + "--out null.csv", dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(std::filesystem::is_character_file("/dev/null"));
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.File("null.csv")));
+  ASSERT_TRUE(std::filesystem::is_character_file("/dev/null"));
   // A symlink: its target is replaced, the link stays a link.
   std::filesystem::create_directory(dir.File("real"));
   { std::ofstream(dir.File("real/e.csv")) << "old\n"; }
@@ -73,13 +76,14 @@ TEST(OutputSafetyCli, NonRegularOutputsAreWrittenInPlace) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::is_symlink(dir.File("e.csv")));
   EXPECT_EQ(ReadFile(dir.File("real/e.csv")).rfind("t,", 0), 0u);
-  EXPECT_EQ(dir.Files(), (std::vector<std::string>{"d.csv", "d.csv.json", "e.csv", "real"}));
+  EXPECT_EQ(dir.Files(),
+            (std::vector<std::string>{"d.csv", "d.csv.json", "e.csv", "null.csv", "real"}));
   // A 250-byte name: the temporary name must stay under the 255-byte limit.
   const std::string long_name = std::string(246, 'x') + ".csv";
   r = RunEstlab(filter + "--out " + long_name, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(dir.Exists(long_name));
-  EXPECT_EQ(dir.Files().size(), 5u);  // no temporary file left behind
+  EXPECT_EQ(dir.Files().size(), 6u);  // no temporary file left behind
 }
 
 }  // namespace
