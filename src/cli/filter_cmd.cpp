@@ -108,7 +108,8 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   po::options_description desc(
       "estlab filter: run a Kalman-family or particle filter over a data file");
   desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
-      "out", po::value<std::string>(), "per-step output CSV")("json", "print a JSON summary");
+      "out", po::value<std::string>(), "per-step output CSV (never an input file)")(
+      "json", "print a JSON summary");
   AddFilterOptions(&desc);
   AddConfigOption(&desc);
   po::variables_map vm;

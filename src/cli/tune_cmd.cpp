@@ -411,7 +411,8 @@ int RunTune(const std::vector<std::string>& args) {
       "true-r-diag", po::value<std::string>(),
       "validation: true R diagonal (else <validate>.json)")(
       "out", po::value<std::string>(),
-      "write the tuned Q/R as 'estlab filter' options (tuned.ini)")("json", "print a JSON summary");
+      "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
+      "json", "print a JSON summary");
   AddFilterOptions(&desc, "init-");
   AddConfigOption(&desc);
   po::variables_map vm;
