@@ -10,12 +10,8 @@
 namespace estlab::testing {
 namespace {
 
-const char* kSimulate =
-    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
-    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-const char* kFilterArgs =
-    "filter --model pendulum --param g=9.8 --measure sin --data d.csv --integrator euler "
-    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 ";
+const char* kSimulate = kPendulumSimulate;
+const std::string kFilterArgs = std::string(kPendulumFilter) + "--data d.csv ";
 
 TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
   TempDir dir;
@@ -115,9 +111,7 @@ TEST(FilterCli, PriorTimeAfterTheFirstRowIsRefused) {
     std::ofstream f(dir.File("late.csv"));
     f << "t,z_sin_theta\n0.5,0.1\n0.6,0.1\n";
   }
-  const std::string late = std::string(kFilterArgs) + "--out e.csv";
-  const std::string args =
-      late.substr(0, late.find("d.csv")) + "late.csv" + late.substr(late.find("d.csv") + 5);
+  const std::string args = std::string(kPendulumFilter) + "--data late.csv --out e.csv";
   RunResult r = RunEstlab(args + " --t0 0.7", dir.path());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("estlab: error: --t0 0.7 is later than the first data row (late.csv:2, "

@@ -12,16 +12,9 @@
 namespace estlab::testing {
 namespace {
 
-const char* kSimulate =
-    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 1 --dt 0.0125 "
-    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-const char* kFilter =
-    "filter --model pendulum --param g=9.8 --measure sin --integrator euler "
-    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 ";
-
 TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
   TempDir dir;
-  ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
   {
     std::ofstream f(dir.File("c.ini"));
     f << "r-diag = 0.1\n";
@@ -33,7 +26,7 @@ TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
     std::string args;
     std::string expect;
   };
-  const std::string filter = kFilter;
+  const std::string filter = kPendulumFilter;
   const std::string tune = "tune --model pendulum --measure sin --filter ekf ";
   const std::vector<Case> cases = {
       {filter + "--data d.csv --out d.csv", "--out 'd.csv' is the input file 'd.csv'"},
@@ -59,8 +52,8 @@ TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
 
 TEST(OutputSafetyCli, NonRegularOutputsAreWrittenInPlace) {
   TempDir dir;
-  ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
-  const std::string filter = std::string(kFilter) + "--data d.csv ";
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
+  const std::string filter = std::string(kPendulumFilter) + "--data d.csv ";
   // A device (through a link, so that a regressed build run as root replaces
   // the link and not /dev/null itself): written directly, stays a device.
   std::filesystem::create_symlink("/dev/null", dir.File("null.csv"));
