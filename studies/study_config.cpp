@@ -1,6 +1,7 @@
 #include "studies/study_config.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -211,12 +212,34 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
   return c;
 }
 
+namespace {
+
+// `text` without a leading UTF-8 BOM and with CRLF and lone CR (old Mac)
+// line ends turned into LF, so editors' variants of a file read the same.
+std::string WithUnixLineEnds(const std::string& text) {
+  const size_t start = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  std::string out;
+  out.reserve(text.size());
+  for (size_t i = start; i < text.size(); ++i) {
+    if (text[i] != '\r') {
+      out += text[i];
+    } else if (i + 1 == text.size() || text[i + 1] != '\n') {
+      out += '\n';
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 StudyConfig LoadStudyConfig(const std::string& path) {
+  if (std::filesystem::is_directory(path))
+    throw InputError("study config '" + path + "' is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read study config '" + path + "'");
   std::ostringstream s;
   s << in.rdbuf();
-  return ParseStudyConfig(s.str(), path);
+  return ParseStudyConfig(WithUnixLineEnds(s.str()), path);
 }
 
 }  // namespace estlab

@@ -40,7 +40,8 @@ other names, --column ours=[a*]theirs[+-b] also converts (theta=angle-pi,
 theta=0.0174533*angle_deg; a and b numbers or pi). Columns named like the states are the truth: when all are present
 the errors, RMSE/MAE and NEES are computed. An empty or NaN measurement cell
 means no update at that time. Models with an input read a 'u' column if present
-(else --input). The prior holds at --t0 (default: the first row's time).
+(else --input). The prior holds at --t0 (default: the first row's time; a --t0 later than
+the first row is refused).
 
 Output: est.csv with t, <state>_est, <state>_var, nu_<output>, nis, loglik
 [, <state>_err, nees]; a summary table on stdout, or JSON with --json.
@@ -107,7 +108,8 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   po::options_description desc(
       "estlab filter: run a Kalman-family or particle filter over a data file");
   desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
-      "out", po::value<std::string>(), "per-step output CSV")("json", "print a JSON summary");
+      "out", po::value<std::string>(), "per-step output CSV (never an input file)")(
+      "json", "print a JSON summary");
   AddFilterOptions(&desc);
   AddConfigOption(&desc);
   po::variables_map vm;
@@ -121,11 +123,13 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required");
   if (!vm.count("out")) throw InputError("--out is required");
+  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   const FilterSpec spec = BuildFilterSpec(vm, model);
   const FilterData data =
       LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
                      ParseColumnRenames(vm));
+  CheckPriorTime(spec, data);
   const std::string out_path = vm["out"].as<std::string>();
   OutputFile out(out_path);
   const FilterRunOutput result = model.run_filter(spec, data);

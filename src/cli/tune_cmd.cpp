@@ -212,6 +212,7 @@ Validation Validate(const po::variables_map& vm, const ModelEntry& model, const 
                      "' is not available");
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const FilterData data = LoadFilterData(v.path, model, meas, ParseColumnRenames(vm));
+  CheckPriorTime(spec, data);
   v.initial = model.run_filter(spec, data).summary;
   v.tuned = model.run_filter(result.tuned_spec, data).summary;
 
@@ -410,7 +411,8 @@ int RunTune(const std::vector<std::string>& args) {
       "true-r-diag", po::value<std::string>(),
       "validation: true R diagonal (else <validate>.json)")(
       "out", po::value<std::string>(),
-      "write the tuned Q/R as 'estlab filter' options (tuned.ini)")("json", "print a JSON summary");
+      "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
+      "json", "print a JSON summary");
   AddFilterOptions(&desc, "init-");
   AddConfigOption(&desc);
   po::variables_map vm;
@@ -423,6 +425,9 @@ int RunTune(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required (one or more training files)");
+  if (vm.count("out"))
+    RefuseOutputOverInput("--out", vm["out"].as<std::string>(),
+                          InputFiles(vm, {"data", "validate", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = true});
   if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
@@ -457,8 +462,10 @@ int RunTune(const std::vector<std::string>& args) {
 
   std::vector<FilterData> datasets;
   const auto renames = ParseColumnRenames(vm);
-  for (const auto& path : vm["data"].as<std::vector<std::string>>())
+  for (const auto& path : vm["data"].as<std::vector<std::string>>()) {
     datasets.push_back(LoadFilterData(path, model, meas, renames));
+    CheckPriorTime(spec, datasets.back());
+  }
   if (vm.count("validate") && model.run_filter == nullptr)
     throw InputError("--validate: the filter runner is not available");
   // Open the output first so an unwritable path fails before the work.

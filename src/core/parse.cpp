@@ -18,6 +18,21 @@ std::vector<std::string> Split(const std::string& s, char sep) {
   if (!s.empty() && s.back() == sep) parts.push_back("");
   return parts;
 }
+
+// `text` for an error message: control bytes (NUL, tab, ...) as \xNN, so the
+// message is neither cut at a NUL nor garbled; UTF-8 letters are kept.
+std::string Printable(const std::string& text) {
+  std::string out;
+  for (const unsigned char c : text) {
+    if (c >= 0x20 && c != 0x7f) {
+      out += char(c);
+      continue;
+    }
+    const char* hex = "0123456789abcdef";
+    out += {'\\', 'x', hex[c >> 4], hex[c & 15]};
+  }
+  return out;
+}
 }  // namespace
 
 std::string Trim(const std::string& s) {
@@ -34,10 +49,16 @@ double ParseNumber(const std::string& raw, const std::string& option) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size()) {
-    throw InputError(option + ": '" + text + "' is not a number");
+    throw InputError(option + ": '" + Printable(text) + "' is not a number");
   }
-  if (!std::isfinite(v) || errno == ERANGE) {
+  // strtod sets ERANGE for overflow (v = ±HUGE_VAL) and for results below
+  // DBL_MIN: subnormals such as 4.9e-324 are exact enough and accepted; only
+  // a nonzero text that rounds to 0 (1e-400) is refused as underflow.
+  if (!std::isfinite(v) || (errno == ERANGE && std::fabs(v) > 1)) {
     throw InputError(option + ": '" + text + "' is not a finite number");
+  }
+  if (errno == ERANGE && v == 0) {
+    throw InputError(option + ": '" + text + "' is too small (underflows to 0)");
   }
   return v;
 }

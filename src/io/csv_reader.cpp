@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -29,6 +30,29 @@ std::vector<std::string> SplitLine(const std::string& line) {
   return cells;
 }
 
+// Longer lines are refused: no real data row comes near it, and it stops
+// `--data /dev/zero` (no line ends at all) from filling the memory.
+constexpr size_t kMaxLineBytes = size_t(1) << 20;
+
+// The next line of `in` into *line, without its end: "\n", "\r\n" or a lone
+// "\r" (old Mac files). False at the end of the input.
+bool NextLine(std::streambuf* in, const std::string& path, long line_no, std::string* line) {
+  line->clear();
+  int c = in->sbumpc();
+  if (c == std::char_traits<char>::eof()) return false;
+  for (; c != std::char_traits<char>::eof() && c != '\n'; c = in->sbumpc()) {
+    if (c == '\r') {
+      if (in->sgetc() == '\n') in->sbumpc();
+      break;
+    }
+    if (line->size() == kMaxLineBytes)
+      throw InputError(path + ":" + std::to_string(line_no) + ": line longer than " +
+                       std::to_string(kMaxLineBytes) + " bytes");
+    line->push_back(char(c));
+  }
+  return true;
+}
+
 std::string Where(const std::string& path, long line, size_t col, const std::string& name) {
   return path + ":" + std::to_string(line) + ": column " + std::to_string(col + 1) +
          (name.empty() ? "" : " ('" + name + "')");
@@ -42,15 +66,17 @@ int CsvTable::ColumnIndex(const std::string& name) const {
   return -1;
 }
 
-CsvTable ParseCsv(const std::string& text, const std::string& path) {
+namespace {
+
+// The table in `in`; `path` names it in messages.
+CsvTable ParseCsvStream(std::istream& in, const std::string& path) {
   CsvTable table;
   table.path = path;
-  std::istringstream in(text);
   std::string line;
   long line_no = 0;
   bool have_header = false;
-  while (std::getline(in, line)) {
-    ++line_no;
+  while (NextLine(in.rdbuf(), path, line_no + 1, &line)) {
+    if (++line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
     if (Trim(line).empty() || Trim(line)[0] == '#') continue;
     std::vector<std::string> cells = SplitLine(line);
     if (!have_header) {
@@ -80,14 +106,7 @@ CsvTable ParseCsv(const std::string& text, const std::string& path) {
         row[j] = std::numeric_limits<double>::quiet_NaN();
         continue;
       }
-      errno = 0;
-      char* end = nullptr;
-      const double v = std::strtod(c.c_str(), &end);
-      if (end != c.c_str() + c.size() || errno == ERANGE || std::isinf(v)) {
-        throw InputError(Where(path, line_no, j, table.columns[j]) + ": '" + c +
-                         "' is not a finite number");
-      }
-      row[j] = v;
+      row[j] = ParseNumber(c, Where(path, line_no, j, table.columns[j]));
     }
     table.rows.push_back(std::move(row));
     table.line_numbers.push_back(line_no);
@@ -96,12 +115,19 @@ CsvTable ParseCsv(const std::string& text, const std::string& path) {
   return table;
 }
 
+}  // namespace
+
+CsvTable ParseCsv(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
+  return ParseCsvStream(in, path);
+}
+
 CsvTable ReadCsv(const std::string& path) {
-  std::ifstream in(path);
+  if (std::filesystem::is_directory(path))
+    throw InputError("data file '" + path + "' is a directory");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read data file '" + path + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseCsv(text.str(), path);
+  return ParseCsvStream(in, path);
 }
 
 }  // namespace estlab

@@ -12,19 +12,47 @@
 
 namespace estlab {
 
-OutputFile::OutputFile(const std::string& path)
-    : path_(path), tmp_path_(path + ".tmp." + std::to_string(::getpid())) {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The file a write to `path` lands in: symlinks followed (also a dangling one,
+// whose target is created), other paths unchanged.
+std::string ResolveSymlinks(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_symlink(fs::symlink_status(path, ec))) return path;
+  const fs::path resolved = fs::weakly_canonical(path, ec);
+  if (!ec && !fs::is_symlink(fs::symlink_status(resolved, ec))) return resolved.string();
+  throw InputError("cannot resolve the symbolic link '" + path + "'");
+}
+
+// ".estlab-<pid>-<n>.tmp" beside `target`: short, so any name that fits the
+// file system's 255-byte limit can be written.
+std::string TempPathBeside(const std::string& target) {
+  static int counter = 0;
+  const std::string name =
+      ".estlab-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp";
+  return (fs::path(target).parent_path() / name).string();
+}
+
+}  // namespace
+
+OutputFile::OutputFile(const std::string& path) : path_(path) {
   if (path.empty()) throw InputError("output path is empty");
-  if (std::filesystem::is_directory(path))
-    throw InputError("output path '" + path + "' is a directory");
-  stream_.open(tmp_path_, std::ios::out | std::ios::trunc);
+  target_ = ResolveSymlinks(path);
+  std::error_code ec;
+  const fs::file_status st = fs::status(target_, ec);
+  if (fs::is_directory(st)) throw InputError("output path '" + path + "' is a directory");
+  const bool direct = fs::exists(st) && !fs::is_regular_file(st);
+  if (!direct) tmp_path_ = TempPathBeside(target_);
+  stream_.open(direct ? target_ : tmp_path_, std::ios::out | std::ios::trunc);
   if (!stream_) throw InputError("cannot write output file '" + path + "'");
 }
 
 OutputFile::~OutputFile() {
   if (!committed_) {
     stream_.close();
-    std::remove(tmp_path_.c_str());
+    if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
   }
 }
 
@@ -32,17 +60,27 @@ void OutputFile::Commit() {
   stream_.flush();
   const bool ok = static_cast<bool>(stream_);
   stream_.close();
+  committed_ = true;
   if (!ok) {
-    std::remove(tmp_path_.c_str());
-    committed_ = true;
+    if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
     throw InputError("error while writing '" + path_ + "'");
   }
-  if (std::rename(tmp_path_.c_str(), path_.c_str()) != 0) {
+  if (tmp_path_.empty()) return;
+  if (std::rename(tmp_path_.c_str(), target_.c_str()) != 0) {
     std::remove(tmp_path_.c_str());
-    committed_ = true;
     throw InputError("cannot move output into place at '" + path_ + "'");
   }
-  committed_ = true;
+}
+
+void RefuseOutputOverInput(const std::string& option, const std::string& output,
+                           const std::vector<std::string>& inputs) {
+  std::error_code ec;
+  if (!fs::is_regular_file(output, ec)) return;  // /dev/null may be read and written
+  for (const std::string& input : inputs) {
+    if (fs::equivalent(output, input, ec) && !ec)
+      throw InputError(option + " '" + output + "' is the input file '" + input +
+                       "'; refusing to overwrite it (choose another output name)");
+  }
 }
 
 std::string CellForDisplay(const std::string& cell) {

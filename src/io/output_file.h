@@ -1,6 +1,10 @@
-// Files that appear whole or not at all: text goes to "<path>.tmp.<pid>" and
-// is renamed onto <path> by Commit(). A file never committed is removed, so a
-// failed command leaves no partial output under the requested name.
+// Files that appear whole or not at all: text goes to a short temporary name
+// ".estlab-<pid>-<n>.tmp" in the target's folder and is renamed onto it by
+// Commit(). A file never committed is removed, so a failed command leaves no
+// partial output under the requested name. A symlink is resolved first (the
+// link stays, its target is replaced); anything that exists and is not a
+// regular file (/dev/null, a FIFO, a device) is written directly, never
+// replaced by a regular file.
 //
 // Usage:
 //   OutputFile out("traj.csv");          // throws InputError if unwritable
@@ -29,10 +33,18 @@ class OutputFile {
 
  private:
   std::string path_;
-  std::string tmp_path_;
+  std::string target_;    // path_ with symlinks resolved
+  std::string tmp_path_;  // empty when writing directly to target_
   std::ofstream stream_;
   bool committed_ = false;
 };
+
+// Throws InputError naming both when `output` (the value of option `option`,
+// e.g. "--out") is the same file as one of `inputs`: same device and inode,
+// so "d.csv", "./d.csv" and a link to it all match. Paths that do not exist
+// never match. Call before reading inputs, so nothing is written.
+void RefuseOutputOverInput(const std::string& option, const std::string& output,
+                           const std::vector<std::string>& inputs);
 
 // "%.17g", the shortest text that reads back to the same double.
 std::string FormatDouble(double v);

@@ -84,6 +84,27 @@ void CheckCovariance(const std::vector<double>& a, int n, const std::string& wha
   }
 }
 
+void CheckPriorTime(const FilterSpec& spec, const FilterData& data) {
+  if (!spec.has_t0 || data.t.empty() || spec.t0 <= data.t[0]) return;
+  throw InputError("--t0 " + FormatNumber(spec.t0) + " is later than the first data row (" +
+                   data.path + ":" + std::to_string(data.lines[0]) +
+                   ", t = " + FormatNumber(data.t[0]) +
+                   "); give --t0 <= " + FormatNumber(data.t[0]) + " or leave it out");
+}
+
+std::vector<std::string> InputFiles(const po::variables_map& vm,
+                                    const std::vector<std::string>& keys) {
+  std::vector<std::string> files;
+  for (const std::string& key : keys) {
+    if (!vm.count(key)) continue;
+    const boost::any& value = vm[key].value();
+    if (const auto* one = boost::any_cast<std::string>(&value)) files.push_back(*one);
+    if (const auto* many = boost::any_cast<std::vector<std::string>>(&value))
+      files.insert(files.end(), many->begin(), many->end());
+  }
+  return files;
+}
+
 void AddConfigOption(po::options_description* desc) {
   desc->add_options()("config", po::value<std::vector<std::string>>()->composing(),
                       "read filter options from FILE ('key = value' lines, e.g. tuned.ini from "

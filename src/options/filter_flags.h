@@ -53,6 +53,17 @@ FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
                           const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
                           bool read_truth = true);
 
+// Throws InputError when spec's --t0 is later than the first row of `data`
+// (the filter cannot run back to it; it used to be ignored silently). The
+// message names the first row (FILE:LINE) and its time.
+void CheckPriorTime(const FilterSpec& spec, const FilterData& data);
+
+// The file names given to the options `keys` (each a string or a repeatable
+// string option), in order; absent options add nothing. For
+// RefuseOutputOverInput.
+std::vector<std::string> InputFiles(const boost::program_options::variables_map& vm,
+                                    const std::vector<std::string>& keys);
+
 // The --column maps of the command line (ParseColumnMaps).
 std::vector<ColumnMap> ParseColumnRenames(const boost::program_options::variables_map& vm);
 

@@ -78,6 +78,15 @@ inline std::vector<std::string> SplitLines(const std::string& text) {
   return lines;
 }
 
+// A noisy pendulum run (measurement `sin`) into d.csv, and filter options
+// that fit it (append --data and --out).
+inline constexpr const char* kPendulumSimulate =
+    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
+    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
+inline constexpr const char* kPendulumFilter =
+    "filter --model pendulum --param g=9.8 --measure sin --integrator euler "
+    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 ";
+
 struct RunResult {
   int exit_code = -1;  // -1 when the process did not exit normally
   std::string out;     // stdout

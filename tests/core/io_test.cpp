@@ -43,6 +43,51 @@ TEST(CsvReader, ErrorsNameFileLineAndColumn) {
 
 // Console tables format numbers, never cut their text (issue 14, item 1: a
 // mean of 2.176861944e-05 was printed as 2.17686194).
+TEST(CsvReader, AcceptsBomAndAllLineEndings) {
+  for (const std::string text : {"\xEF\xBB\xBFt,z\n0,1\n0.1,2\n", "t,z\r\n0,1\r\n0.1,2\r\n",
+                                 "t,z\r0,1\r0.1,2", "\xEF\xBB\xBFt,z\r0,1\r\n0.1,2\n"}) {
+    const CsvTable t = ParseCsv(text, "d.csv");
+    ASSERT_EQ(t.columns, (std::vector<std::string>{"t", "z"})) << text;
+    ASSERT_EQ(t.rows.size(), 2u) << text;
+    EXPECT_EQ(t.rows[1][1], 2.0) << text;
+    EXPECT_EQ(t.line_numbers[1], 3) << text;
+  }
+}
+
+std::string CsvError(const std::string& text) {
+  try {
+    ParseCsv(text, "d.csv");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CsvReader, RefusesLongLinesAndEscapesControlBytes) {
+  const std::string long_line = "t,z\n0,1\n" + std::string(size_t(1) << 21, '1') + "\n";
+  EXPECT_EQ(CsvError(long_line), "d.csv:3: line longer than 1048576 bytes");
+  EXPECT_EQ(CsvError(std::string("t,z\n0,1\0002\n", 10)),
+            "d.csv:2: column 2 ('z'): '1\\x002' is not a number");
+  EXPECT_EQ(CsvError("t,z\n0,4.9e-324\n"), "");
+  EXPECT_EQ(CsvError("t,z\n0,1e-400\n"),
+            "d.csv:2: column 2 ('z'): '1e-400' is too small (underflows to 0)");
+}
+
+TEST(CsvReader, RefusesDirectoriesAndEndlessFiles) {
+  try {
+    ReadCsv("/tmp");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "data file '/tmp' is a directory");
+  }
+  try {
+    ReadCsv("/dev/zero");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "/dev/zero:1: line longer than 1048576 bytes");
+  }
+}
+
 TEST(CellForDisplay, FormatsNumbersAndNeverCutsThem) {
   EXPECT_EQ(CellForDisplay("2.176861944e-05"), "2.17686e-05");
   EXPECT_EQ(CellForDisplay("0.12345678912345"), "0.123457");

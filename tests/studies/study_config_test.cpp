@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 
 #include "src/core/types.h"
 #include "studies/study_results.h"
@@ -59,6 +61,30 @@ TEST(StudyConfig, ParsesTheTinyStudy) {
   EXPECT_EQ(std::get<ParticleOptions>(s.combos[4].spec.filter).num_particles, 100);
   EXPECT_EQ(c.claims.size(), 1u);
   EXPECT_EQ(c.references.size(), 1u);
+}
+
+TEST(StudyConfig, ReadsBomAndCrLineEndsAndRefusesDirectories) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const std::string dir = ::testing::TempDir();
+  for (const std::string& eol : {std::string("\r"), std::string("\r\n")}) {
+    const std::string path = dir + "/estlab_eol_study.ini";
+    {
+      std::ofstream f(path, std::ios::binary);
+      f << "\xEF\xBB\xBF";
+      for (const char c : TinyStudy(4)) f << (c == '\n' ? eol : std::string(1, c));
+    }
+    const StudyConfig c = LoadStudyConfig(path);
+    std::remove(path.c_str());
+    EXPECT_EQ(c.study.name, "tiny");
+    EXPECT_EQ(c.study.runs, 4);
+    EXPECT_EQ(c.text, TinyStudy(4));
+  }
+  try {
+    LoadStudyConfig(dir);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "study config '" + dir + "' is a directory");
+  }
 }
 
 TEST(StudyConfig, AlternativesExpandToNamedScenarios) {
