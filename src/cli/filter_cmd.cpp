@@ -53,6 +53,11 @@ NIS check: when the mean NIS is more than 2x its upper 95% bound, or less than
 half its lower bound, the summary says so in one line with the usual causes
 (model parameters, Q/R: 'estlab tune', angle conventions: --column).
 
+Adaptation (--adapt): 'N clip(s)' counts the adapted Q and R matrices (one
+each per update, Q and R apart) whose eigenvalues had to be raised to the
+floor to stay positive definite; with --adapt-what qr it can reach twice the
+number of updates.
+
 Without --out only the summary is printed. A filter that diverges exits 1
 naming the step and time; est.csv keeps every row computed before.
 )";
@@ -80,7 +85,23 @@ void PrintNisWarning(const FilterSummary& s) {
                "--column, e.g. theta=angle-pi)\n";
 }
 
-void PrintSummary(const FilterSummary& s, const std::string& out_path) {
+// adapt_clips counts adapted matrices, not steps: at each update the adapter
+// (src/filters/noise_adapter.h) replaces Q and/or R and counts one clip for
+// each of them that had an eigenvalue raised to the floor, so with
+// --adapt-what qr the count can reach twice the number of updates.
+void PrintAdaptClips(const FilterSummary& s, const AdaptSpec& adapt) {
+  const int per_update = int(adapt.adapt_q) + int(adapt.adapt_r);
+  std::cout << "adaptation      " << s.adapt_clips << " clip(s): adapted "
+            << (per_update == 2 ? "Q or R matrices"
+                : adapt.adapt_q ? "Q matrices"
+                                : "R matrices")
+            << " with an eigenvalue raised to the floor " << adapt.eigen_floor
+            << " to stay positive definite (one count per adapted matrix; " << per_update
+            << " matri" << (per_update == 2 ? "ces" : "x") << " per update, " << s.updates
+            << " updates)\n";
+}
+
+void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& out_path) {
   std::cout << std::setprecision(5);
   std::cout << "filter        " << s.filter << "\nsteps         " << s.steps << " (" << s.updates
             << " updates)\nstatus        " << s.status << "\n";
@@ -100,10 +121,7 @@ void PrintSummary(const FilterSummary& s, const std::string& out_path) {
     std::cout << "mean NEES       " << s.mean_nees << "   (95% bounds " << s.nees_bounds95[0]
               << " .. " << s.nees_bounds95[1] << ")\n";
   }
-  if (s.adapt_clips > 0) {
-    std::cout << "adaptation      eigenvalues of the adapted Q/R were clipped to the floor "
-              << s.adapt_clips << " times to keep them positive definite\n";
-  }
+  if (s.adapt_clips > 0) PrintAdaptClips(s, adapt);
   std::cout << "wall time       " << s.wall_s << " s (" << s.us_per_step << " us/step)\n";
   if (!out_path.empty()) std::cout << "wrote           " << out_path << "\n";
 }
@@ -172,7 +190,7 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   if (vm.count("json")) {
     std::cout << FilterSummaryJson(result.summary) << "\n";
   } else {
-    PrintSummary(result.summary, out_path);
+    PrintSummary(result.summary, spec.adapt, out_path);
   }
   if (!result.summary.ok) {
     std::cerr << "estlab: error: " << result.summary.message << "\n";

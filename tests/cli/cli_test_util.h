@@ -106,6 +106,15 @@ inline RunResult RunEstlab(const std::string& args, const std::string& cwd) {
   return r;
 }
 
+// The pendulum with y = sin(theta) that several CLI tests filter: simulate
+// d.csv (R = 0.1), then the filter options up to the noise R (add --r-diag).
+inline constexpr const char* kSimulate =
+    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
+    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
+inline constexpr const char* kFilterWithoutR =
+    "filter --model pendulum --param g=9.8 --measure sin --data d.csv --integrator euler "
+    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 ";
+
 }  // namespace estlab::testing
 
 #endif  // ESTLAB_TESTS_CLI_CLI_TEST_UTIL_H_

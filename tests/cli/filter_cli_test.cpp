@@ -10,12 +10,7 @@
 namespace estlab::testing {
 namespace {
 
-const char* kSimulate =
-    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
-    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-const char* kFilterArgs =
-    "filter --model pendulum --param g=9.8 --measure sin --data d.csv --integrator euler "
-    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 ";
+const std::string kFilterArgs = std::string(kFilterWithoutR) + "--r-diag 0.1 ";
 
 TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
   TempDir dir;
@@ -36,7 +31,8 @@ TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
               "omega_err,nees");
   }
   // The human summary names RMSE per state.
-  const RunResult r = RunEstlab(std::string(kFilterArgs) + "--filter ukf --out est.csv", dir.path());
+  const RunResult r =
+      RunEstlab(std::string(kFilterArgs) + "--filter ukf --out est.csv", dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("RMSE"), std::string::npos);
   EXPECT_NE(r.out.find("theta"), std::string::npos);
@@ -81,7 +77,8 @@ TEST(FilterCli, BadInputExitsTwoNamingTheProblem) {
        "--q-diag"},
       {"filter --model pendulum --measure angle --data d.csv --q-diag 1,1 --r-diag 1 --out e.csv",
        "z_theta"},
-      {"filter --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out e.csv",
+      {"filter --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out "
+       "e.csv",
        "nothere.csv"},
       {base + "--filter bogus --out e.csv", "bogus"},
       {base + "--filter ukf --resample nope --out e.csv", "nope"},

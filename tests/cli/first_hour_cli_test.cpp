@@ -3,17 +3,14 @@
 // 'estlab list', 'estlab tune --help' showing only the options tune reads.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include "cli_test_util.h"
 
 namespace estlab::testing {
 namespace {
 
-const char* kSimulate =
-    "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
-    "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-const char* kFilterArgs =
-    "filter --model pendulum --param g=9.8 --measure sin --data d.csv --integrator euler "
-    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 ";
+const std::string kFilterArgs = kFilterWithoutR;  // each test adds its --r-diag
 
 TEST(FirstHourCli, FilterWithoutOutPrintsTheSummaryAndWritesNoFile) {
   TempDir dir;
@@ -76,6 +73,32 @@ TEST(FirstHourCli, FilterSaysWhenTheMeanNisIsFarOutsideItsBounds) {
   const RunResult right = RunEstlab(run + "0.1", dir.path());
   ASSERT_EQ(right.exit_code, 0) << right.err;
   EXPECT_EQ(right.out.find("NIS check"), std::string::npos) << right.out;
+}
+
+// Issue 14 item 5: Sage-Husa on Q and R with a short memory clips more often
+// than there are steps (607 clips in 401 updates here): the text says that it
+// counts adapted matrices, two per update.
+TEST(FirstHourCli, AdaptationClipsAreCountedPerAdaptedMatrix) {
+  TempDir dir;
+  ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
+  const std::string run =
+      "filter --model pendulum --param g=9.8 --measure sin --data d.csv "
+      "--integrator euler --x0 theta=0.785398 --p0-diag 0.1,0.1 "
+      "--q-diag 1e-6,1e-4 --r-diag 0.1 --adapt sage-husa --forgetting 0.5 ";
+  const RunResult qr = RunEstlab(run + "--adapt-what qr", dir.path());
+  ASSERT_EQ(qr.exit_code, 0) << qr.err;
+  const size_t at = qr.out.find("adaptation      ");
+  ASSERT_NE(at, std::string::npos) << qr.out;
+  const long clips = std::atol(qr.out.c_str() + at + 16);
+  EXPECT_GT(clips, 401) << qr.out;  // more than the updates ...
+  EXPECT_LE(clips, 2 * 401);        // ... at most one per matrix per update
+  EXPECT_NE(qr.out.find(" clip(s): adapted Q or R matrices with an eigenvalue raised to the "
+                        "floor 1e-10 to stay positive definite (one count per adapted matrix; "
+                        "2 matrices per update, 401 updates)"),
+            std::string::npos)
+      << qr.out;
+  const RunResult help = RunEstlab("filter --help", dir.path());
+  EXPECT_NE(help.out.find("counts the adapted Q and R matrices"), std::string::npos);
 }
 
 }  // namespace
