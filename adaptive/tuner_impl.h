@@ -566,8 +566,10 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   result.termination = best.termination;
   int failed = 0;
   for (const auto& st : result.starts) failed += !st.ok;
+  // Starts are numbered from 1 here as in 'estlab tune' (start 1 = the
+  // initial guess); best_start is the 0-based index into starts.
   result.message = "best of " + std::to_string(result.starts.size()) + " start(s): start " +
-                   std::to_string(result.best_start) +
+                   std::to_string(result.best_start + 1) +
                    (failed ? " (" + std::to_string(failed) + " diverged)" : "");
 
   // Tuned matrices.

@@ -353,6 +353,8 @@ double Score(const StudyTables& t, const ScenarioConfig& sc, const std::string& 
   return sum / double(sc.model->states.size());
 }
 
+// The hand settings are "the paper's" only when [report] names a paper; a
+// study of the user's own data has its own hand settings.
 void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t) {
   std::vector<CompareCase> cases;
   for (const ScenarioConfig& sc : c.scenarios) {
@@ -400,7 +402,10 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
                    : std::string();
   };
   md << "## Hand-tuned vs auto-tuned vs oracle Q/R\n\n"
-     << "Each filter with the paper's hand-tuned noise settings, with Q/R from the likelihood "
+     << "Each filter with "
+     << (c.paper.empty() ? "the config's hand noise settings"
+                         : "the paper's hand-tuned noise settings")
+     << ", with Q/R from the likelihood "
         "tuner (fitted on separate training trajectories, then fixed for every run) and with the "
         "truth's own noise (the oracle). **Score** = mean over the states of the setting's mean "
         "RMSE divided by the oracle's, so the oracle scores 1 and states in different units "

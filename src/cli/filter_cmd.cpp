@@ -1,7 +1,9 @@
 // estlab filter: run one filter over a data file.
 #include <boost/program_options.hpp>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 
 #include "src/cli/commands.h"
 #include "src/io/json.h"
@@ -33,6 +35,9 @@ constexpr const char* kExamples = R"(Examples:
   estlab filter --model pendulum --measure angle --filter ukf --adapt sage-husa \
       --adapt-what r --data lab.csv --column z_theta=angle_rad --q-diag 1e-6,1e-4 \
       --r-diag 0.01 --out est.csv
+  # Only the summary (no per-step file):
+  estlab filter --model pendulum --param g=9.8 --measure sin --filter ekf --data d.csv \
+      --integrator euler --x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.09
 
 Data: a CSV with a 't' column and one 'z_<output>' column per output of the
 measurement (what 'estlab simulate --measure' writes); --column ours=theirs maps
@@ -43,13 +48,61 @@ means no update at that time. Models with an input read a 'u' column if present
 (else --input). The prior holds at --t0 (default: the first row's time; a --t0 later than
 the first row is refused).
 
-Output: est.csv with t, <state>_est, <state>_var, nu_<output>, nis, loglik
+Output: with --out, est.csv with t, <state>_est, <state>_var, nu_<output>, nis, loglik
 [, <state>_err, nees]; a summary table on stdout, or JSON with --json.
-A filter that diverges exits 1 naming the step and time; est.csv keeps every
-row computed before.
+NIS check: when the mean NIS is more than 2x its upper 95% bound, or less than
+half its lower bound, the summary says so in one line with the usual causes
+(model parameters, Q/R: 'estlab tune', angle conventions: --column).
+
+Adaptation (--adapt): 'N clip(s)' counts the adapted Q and R matrices (one
+each per update, Q and R apart) whose eigenvalues had to be raised to the
+floor to stay positive definite; with --adapt-what qr it can reach twice the
+number of updates.
+
+Without --out only the summary is printed. A filter that diverges exits 1
+naming the step and time; est.csv keeps every row computed before.
 )";
 
-void PrintSummary(const FilterSummary& s, const std::string& out_path) {
+// "Far" outside the 95% bounds of the mean NIS: above kNisFarFactor times the
+// upper bound or below the lower bound divided by it. The bounds of a mean
+// over hundreds of updates are narrow (about 0.86 .. 1.14 for one output and
+// 400 updates), so a well-tuned filter often lands just outside them; a
+// factor 2 off is a filter whose S does not describe its innovations.
+constexpr double kNisFarFactor = 2.0;
+
+// One line when the mean NIS is far outside its bounds, naming the usual
+// causes; nothing otherwise.
+void PrintNisWarning(const FilterSummary& s) {
+  if (s.updates == 0 || !std::isfinite(s.mean_nis)) return;
+  const bool above = s.mean_nis > kNisFarFactor * s.nis_bounds95[1];
+  const bool below = s.mean_nis < s.nis_bounds95[0] / kNisFarFactor;
+  if (!above && !below) return;
+  std::cout << "NIS check       the mean NIS is far " << (above ? "above" : "below")
+            << " its 95% bounds (" << (above ? "> 2x the upper" : "< 1/2 the lower")
+            << " bound): the innovations are " << (above ? "larger" : "smaller")
+            << " than S predicts. Usual causes: wrong model parameters (--param); Q or R too "
+            << (above ? "small" : "large")
+            << " (try 'estlab tune'); angles in another convention than the model's (see "
+               "--column, e.g. theta=angle-pi)\n";
+}
+
+// adapt_clips counts adapted matrices, not steps: at each update the adapter
+// (src/filters/noise_adapter.h) replaces Q and/or R and counts one clip for
+// each of them that had an eigenvalue raised to the floor, so with
+// --adapt-what qr the count can reach twice the number of updates.
+void PrintAdaptClips(const FilterSummary& s, const AdaptSpec& adapt) {
+  const int per_update = int(adapt.adapt_q) + int(adapt.adapt_r);
+  std::cout << "adaptation      " << s.adapt_clips << " clip(s): adapted "
+            << (per_update == 2 ? "Q or R matrices"
+                : adapt.adapt_q ? "Q matrices"
+                                : "R matrices")
+            << " with an eigenvalue raised to the floor " << adapt.eigen_floor
+            << " to stay positive definite (one count per adapted matrix; " << per_update
+            << " matri" << (per_update == 2 ? "ces" : "x") << " per update, " << s.updates
+            << " updates)\n";
+}
+
+void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& out_path) {
   std::cout << std::setprecision(5);
   std::cout << "filter        " << s.filter << "\nsteps         " << s.steps << " (" << s.updates
             << " updates)\nstatus        " << s.status << "\n";
@@ -64,16 +117,14 @@ void PrintSummary(const FilterSummary& s, const std::string& out_path) {
   std::cout << "log-likelihood  " << s.loglik << "\n";
   std::cout << "mean NIS        " << s.mean_nis << "   (95% bounds " << s.nis_bounds95[0] << " .. "
             << s.nis_bounds95[1] << ")\n";
+  PrintNisWarning(s);
   if (!s.rmse.empty()) {
     std::cout << "mean NEES       " << s.mean_nees << "   (95% bounds " << s.nees_bounds95[0]
               << " .. " << s.nees_bounds95[1] << ")\n";
   }
-  if (s.adapt_clips > 0) {
-    std::cout << "adaptation      eigenvalues of the adapted Q/R were clipped to the floor "
-              << s.adapt_clips << " times to keep them positive definite\n";
-  }
-  std::cout << "wall time       " << s.wall_s << " s (" << s.us_per_step << " us/step)\n"
-            << "wrote           " << out_path << "\n";
+  if (s.adapt_clips > 0) PrintAdaptClips(s, adapt);
+  std::cout << "wall time       " << s.wall_s << " s (" << s.us_per_step << " us/step)\n";
+  if (!out_path.empty()) std::cout << "wrote           " << out_path << "\n";
 }
 
 }  // namespace
@@ -108,7 +159,8 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   po::options_description desc(
       "estlab filter: run a Kalman-family or particle filter over a data file");
   desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
-      "out", po::value<std::string>(), "per-step output CSV (never an input file)")(
+      "out", po::value<std::string>(),
+      "per-step output CSV (optional: without it only the summary; never an input file)")(
       "json", "print a JSON summary");
   AddFilterOptions(&desc);
   AddConfigOption(&desc);
@@ -122,27 +174,33 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("data")) throw InputError("--data is required");
-  if (!vm.count("out")) throw InputError("--out is required");
-  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
+  if (vm.count("out"))
+    RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   const FilterSpec spec = BuildFilterSpec(vm, model);
   const FilterData data =
       LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
                      ParseColumnRenames(vm));
   CheckPriorTime(spec, data);
-  const std::string out_path = vm["out"].as<std::string>();
-  OutputFile out(out_path);
+  // Open the output first so an unwritable path fails before the work.
+  const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";
+  std::optional<OutputFile> out;
+  if (!out_path.empty()) out.emplace(out_path);
   const FilterRunOutput result = model.run_filter(spec, data);
-  WriteCsv(out.stream(), result.columns, result.rows);
-  out.Commit();
+  if (out) {
+    WriteCsv(out->stream(), result.columns, result.rows);
+    out->Commit();
+  }
   if (vm.count("json")) {
     std::cout << FilterSummaryJson(result.summary) << "\n";
   } else {
-    PrintSummary(result.summary, out_path);
+    PrintSummary(result.summary, spec.adapt, out_path);
   }
   if (!result.summary.ok) {
-    std::cerr << "estlab: error: " << result.summary.message << "\nestlab: the "
-              << result.rows.size() << " rows computed before are in " << out_path << "\n";
+    std::cerr << "estlab: error: " << result.summary.message << "\n";
+    if (out)
+      std::cerr << "estlab: the " << result.rows.size() << " rows computed before are in "
+                << out_path << "\n";
     return 1;
   }
   return 0;

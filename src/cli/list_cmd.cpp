@@ -13,7 +13,15 @@ namespace estlab::cli {
 namespace {
 const std::vector<std::string> kIntegrators = {"cvodes", "rk4", "euler", "semi-implicit-euler",
                                                "discrete"};
+
+// The "[unit]" that ends a parameter description ("length [m]" -> "[m]"),
+// empty when it has none.
+std::string UnitOf(const std::string& description) {
+  const size_t open = description.rfind('[');
+  if (open == std::string::npos || description.back() != ']') return "";
+  return description.substr(open);
 }
+}  // namespace
 
 void ModelJson(const ModelEntry& model, JsonWriter* json) {
   JsonWriter& j = *json;
@@ -47,8 +55,11 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
   for (size_t i = 0; i < m->states.size(); ++i)
     out << (i ? ", " : "") << m->states[i] << (m->angle_states[i] ? " (angle)" : "");
   out << "\n    parameters:   ";
-  for (size_t i = 0; i < m->params.size(); ++i)
-    out << (i ? ", " : "") << m->params[i].name << "=" << m->params[i].default_value;
+  for (size_t i = 0; i < m->params.size(); ++i) {
+    const std::string unit = UnitOf(m->params[i].description);
+    out << (i ? ", " : "") << m->params[i].name << "=" << m->params[i].default_value
+        << (unit.empty() ? "" : " " + unit);
+  }
   out << "\n    measurements: ";
   for (size_t i = 0; i < m->measurements.size(); ++i) {
     out << (i ? "; " : "") << m->measurements[i].name << " -> ";

@@ -55,7 +55,9 @@ parameters) with CVODES run at rtol <= 1e-10, atol <= 1e-12.
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
 parameter). Multi-start: start 1 is the initial guess, the others a Latin
-hypercube within +- --start-spread (2) of it, drawn from --seed.
+hypercube within +- --start-spread (2) of it, drawn from --seed. Starts are
+numbered from 1 everywhere: the text's "start N", the JSON "message" and
+"best_start"; the JSON "starts" array lists them in that order.
 
 Output: a table (or --json) with the tuned Q and R, the NLL before and after,
 Ceres' termination, and the standard error of every log parameter from the
@@ -348,6 +350,7 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   j.Key("updates").Value(r.updates);
   j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
   j.Key("wall_s").Value(r.wall_s);
+  if (r.best_start >= 0) j.Key("best_start").Value(r.best_start + 1);  // from 1, as the text
   j.Key("starts").BeginArray();
   for (const auto& s : r.starts) {
     j.BeginObject().Key("theta_start").Value(s.theta_start).Key("nll_start").Value(s.nll_start);

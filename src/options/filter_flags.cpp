@@ -5,32 +5,76 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 
 #include "src/core/parse.h"
 #include "src/io/csv_reader.h"
 #include "src/options/filter_settings.h"
+#include "src/run/filter_kinds.h"
 
 namespace po = boost::program_options;
 
 namespace estlab::cli {
 
+namespace {
+
+// The kind a key belongs to when its help starts with "<kind>: " (e.g.
+// "pf: number of particles"), else nullopt.
+std::optional<FilterKind> KindOfKey(const FilterKey& key) {
+  const std::string help = key.help;
+  const size_t colon = help.find(": ");
+  if (colon == std::string::npos || help.find(' ') < colon) return std::nullopt;
+  try {
+    return ParseFilterKind(help.substr(0, colon));
+  } catch (const InputError&) {
+    return std::nullopt;
+  }
+}
+
+// For the tuner: the table's "kf | ekf | ... | pf" with the kinds it cannot
+// tune left out.
+std::string TunableKindsHelp(const std::string& help) {
+  std::string out;
+  size_t start = 0;
+  while (start <= help.size()) {
+    const size_t bar = std::min(help.find(" | ", start), help.size());
+    const std::string name = help.substr(start, bar - start);
+    if (InfoOf(ParseFilterKind(name)).tunable) out += (out.empty() ? "" : " | ") + name;
+    start = bar + 3;
+  }
+  return out;
+}
+
+// Whether the tuner (noise prefix "init-") shows the key: not the options
+// of kinds it cannot tune, nor those of the per-step output.
+bool TunerUses(const FilterKey& key) {
+  const std::optional<FilterKind> kind = KindOfKey(key);
+  return !(kind && !InfoOf(*kind).tunable) && std::string(key.name) != "full-cov";
+}
+
+}  // namespace
+
 void AddFilterOptions(po::options_description* desc, const std::string& np) {
+  const bool tuner = np == "init-";
   for (const FilterKey& k : FilterKeyTable()) {
+    if (tuner && !TunerUses(k)) continue;
     const std::string name = k.noise ? np + k.name : std::string(k.name);
+    const std::string help =
+        tuner && name == "filter" ? TunableKindsHelp(k.help) : std::string(k.help);
     switch (k.kind) {
       case FilterKey::kFlag:
-        desc->add_options()(name.c_str(), k.help);
+        desc->add_options()(name.c_str(), help.c_str());
         break;
       case FilterKey::kRepeatable:
         desc->add_options()(name.c_str(), po::value<std::vector<std::string>>()->composing(),
-                            k.help);
+                            help.c_str());
         break;
       case FilterKey::kValue:
         if (k.default_text != nullptr)
           desc->add_options()(name.c_str(), po::value<std::string>()->default_value(k.default_text),
-                              k.help);
+                              help.c_str());
         else
-          desc->add_options()(name.c_str(), po::value<std::string>(), k.help);
+          desc->add_options()(name.c_str(), po::value<std::string>(), help.c_str());
         break;
     }
   }

@@ -16,7 +16,9 @@
 namespace estlab::cli {
 
 // Adds every filter option. `noise_prefix` is "" for --q-diag etc. and
-// "init-" for the tuner's --init-q-diag.
+// "init-" for the tuner's --init-q-diag. The tuner gets only the options that
+// apply to it: not those of the kinds it cannot tune ("pf: ..." keys,
+// filter_kinds.h), nor --full-cov, and --filter lists the tunable kinds.
 void AddFilterOptions(boost::program_options::options_description* desc,
                       const std::string& noise_prefix = "");
 

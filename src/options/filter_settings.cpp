@@ -51,7 +51,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"particles", "1000", "pf: number of particles"},
       {"resample", "systematic", "pf: multinomial | systematic | stratified | residual"},
       {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
-      {"seed", "1", "pf: random seed", K::kValue, false, true},
+      {"seed", "1", "random seed (pf: the particles; tune: the multi-start points)", K::kValue, false, true},
       {"input", "0", "constant input when the data has no 'u' column", K::kValue, false, true},
       {"column", nullptr, "map a column: ours=[a*]theirs[+-b] (ours = a theirs + b; a, b numbers or pi), e.g. z_theta=angle_rad, theta=angle-pi, theta=0.0174533*angle_deg", K::kRepeatable, false, true},
       {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
@@ -145,8 +145,7 @@ void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions*
   t->integrator = model.discrete_time && !r.Given("integrator")
                       ? Integrator::kDiscrete
                       : ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
-  const std::string error =
-      CheckIntegratorForModel(t->integrator, model.discrete_time, model.name);
+  const std::string error = CheckIntegratorForModel(t->integrator, model.discrete_time, model.name);
   if (!error.empty()) throw KeyError("integrator", error);
   t->substeps = int(r.Integer("substeps", 0));
   const std::string method = r.Text("method");

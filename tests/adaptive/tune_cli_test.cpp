@@ -169,6 +169,26 @@ TEST_F(TuneCli, WhiteAccelScalarLeastSquaresAndHumanOutput) {
   EXPECT_NE(ini.find("r-diag = "), std::string::npos) << ini;
 }
 
+// Issue 14 item 5: the text's "start N" and the JSON's message and best_start
+// number the starts alike, from 1 (start 1 = the initial guess).
+TEST_F(TuneCli, TextAndJsonNumberTheBestStartAlike) {
+  Simulate("train.csv", 3);
+  const std::string args = std::string("tune ") + kFilter +
+                           "--data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 --starts 3 ";
+  const CmdResult text = Estlab(args);
+  ASSERT_EQ(text.exit_code, 0) << text.err << text.out;
+  const size_t at = text.out.find(" iterations, start ");
+  ASSERT_NE(at, std::string::npos) << text.out;
+  const int best = std::atoi(text.out.c_str() + at + 19);
+  EXPECT_GE(best, 1);
+  EXPECT_LE(best, 3);
+  const CmdResult json = Estlab(args + "--json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const std::string n = std::to_string(best);
+  EXPECT_NE(json.out.find("best of 3 start(s): start " + n), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"best_start\": " + n + ","), std::string::npos) << json.out;
+}
+
 TEST_F(TuneCli, BadInputExitsTwo) {
   Simulate("train.csv", 4);
   const std::string base = std::string("tune ") + kFilter + "--data train.csv ";

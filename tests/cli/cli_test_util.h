@@ -83,9 +83,12 @@ inline std::vector<std::string> SplitLines(const std::string& text) {
 inline constexpr const char* kPendulumSimulate =
     "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
     "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-inline constexpr const char* kPendulumFilter =
-    "filter --model pendulum --param g=9.8 --measure sin --integrator euler "
-    "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.1 ";
+#define ESTLAB_TEST_PENDULUM_FILTER                                             \
+  "filter --model pendulum --param g=9.8 --measure sin --integrator euler " \
+  "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 "
+inline constexpr const char* kPendulumFilter = ESTLAB_TEST_PENDULUM_FILTER "--r-diag 0.1 ";
+// The same up to the noise R (add --r-diag), on d.csv.
+inline constexpr const char* kFilterWithoutR = ESTLAB_TEST_PENDULUM_FILTER "--data d.csv ";
 
 struct RunResult {
   int exit_code = -1;  // -1 when the process did not exit normally
@@ -114,6 +117,7 @@ inline RunResult RunEstlab(const std::string& args, const std::string& cwd) {
   std::filesystem::remove(capture + ".err");
   return r;
 }
+
 
 }  // namespace estlab::testing
 

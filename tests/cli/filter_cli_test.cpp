@@ -10,12 +10,11 @@
 namespace estlab::testing {
 namespace {
 
-const char* kSimulate = kPendulumSimulate;
 const std::string kFilterArgs = std::string(kPendulumFilter) + "--data d.csv ";
 
 TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
   TempDir dir;
-  ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
   for (const char* f : {"ekf", "iekf", "ukf", "ckf", "ghkf", "pf", "kf"}) {
     const RunResult r =
         RunEstlab(std::string(kFilterArgs) + "--filter " + f + " --out est.csv --json", dir.path());
@@ -60,7 +59,7 @@ TEST(FilterCli, ColumnMappingAndMissingMeasurements) {
 
 TEST(FilterCli, BadInputExitsTwoNamingTheProblem) {
   TempDir dir;
-  ASSERT_EQ(RunEstlab(kSimulate, dir.path()).exit_code, 0);
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
   struct Case {
     std::string args;
     std::string expect;

@@ -143,6 +143,10 @@ TEST(StudyReport, HandAutoOracleSectionAndMseTable) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string report = ReadFile(dir.File("t/report.md"));
   EXPECT_NE(report.find("## Hand-tuned vs auto-tuned vs oracle Q/R"), std::string::npos);
+  // No paper in [report]: the hand settings are the config's, not a paper's.
+  EXPECT_NE(report.find("Each filter with the config's hand noise settings, with Q/R"),
+            std::string::npos);
+  EXPECT_EQ(report.find("the paper's hand-tuned"), std::string::npos);
   EXPECT_NE(report.find("| pend | ekf | `hand` | "), std::string::npos) << report;
   EXPECT_NE(report.find("| pend | ekf | theta | "), std::string::npos) << report;
   EXPECT_NE(report.find("auto ≤ 1.1 × oracle holds in "), std::string::npos);
@@ -171,6 +175,21 @@ TEST(StudyReport, HandAutoOracleSectionAndMseTable) {
   EXPECT_EQ(ReadFile(dir.File("p/runs.csv")), ReadFile(dir.File("p2/runs.csv")));
   EXPECT_NE(ReadFile(dir.File("p/report.md")).find("Poisson counts with lambda [0.05]"),
             std::string::npos);
+}
+
+// With [report] paper = ..., the hand settings are the paper's.
+TEST(StudyReport, HandSettingsAreThePapersOnlyWhenReportNamesAPaper) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  TempDir dir;
+  WriteText(dir.File("s.ini"), Replace(TinyStudy(3, 25, 100, /*tuned=*/true), "[report]\n",
+                                       "[report]\npaper = 002\n"));
+  const auto r = RunEstlab("study s.ini --out t --jobs 2 --quiet", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string report = ReadFile(dir.File("t/report.md"));
+  EXPECT_NE(report.find("Each filter with the paper's hand-tuned noise settings, with Q/R"),
+            std::string::npos)
+      << report;
+  EXPECT_EQ(report.find("the config's hand noise settings"), std::string::npos);
 }
 
 // A section expanded over one key into >= 3 scenarios gets an RMSE-vs-key
