@@ -10,6 +10,7 @@
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/run/filter_spec.h"
+#include "error_text.h"
 
 namespace estlab {
 namespace {
@@ -55,12 +56,7 @@ TEST(CsvReader, AcceptsBomAndAllLineEndings) {
 }
 
 std::string CsvError(const std::string& text) {
-  try {
-    ParseCsv(text, "d.csv");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorText([&] { ParseCsv(text, "d.csv"); });
 }
 
 TEST(CsvReader, RefusesLongLinesAndEscapesControlBytes) {

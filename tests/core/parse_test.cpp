@@ -6,17 +6,13 @@
 
 #include "src/core/parse.h"
 #include "src/core/types.h"
+#include "error_text.h"
 
 namespace estlab {
 namespace {
 
 std::string ErrorOf(const std::string& text) {
-  try {
-    ParseNumber(text, "--x");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorText([&] { ParseNumber(text, "--x"); });
 }
 
 TEST(ParseNumber, AcceptsSubnormals) {

@@ -10,6 +10,7 @@
 
 #include "src/core/types.h"
 #include "studies/study_results.h"
+#include "error_text.h"
 #include "study_test_util.h"
 
 namespace estlab {
@@ -21,12 +22,7 @@ using testing::TinyStudy;
 
 // The error message of parsing `text`, or "" when it parses.
 std::string ParseError(const std::string& text) {
-  try {
-    ParseStudyConfig(text, "s.ini");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorText([&] { ParseStudyConfig(text, "s.ini"); });
 }
 
 TEST(StudyConfig, ParsesTheTinyStudy) {
