@@ -50,14 +50,15 @@ inline constexpr bool kDiscreteTime = IsDiscreteTime<M>();
 // discrete-time model.
 template <class M>
 concept ContinuousDynamics =
-    !kDiscreteTime<M> &&
-    requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+    !kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
   { M::template Rhs<double>(0.0, x, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 template <class M>
-concept DiscreteDynamics =
-    kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
-  { M::template Step<double>(0.0, x, 0.1, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
+concept DiscreteDynamics = kDiscreteTime<M> &&
+    requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+  {
+    M::template Step<double>(0.0, x, 0.1, 0.0, p)
+    } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 
 template <class M>

@@ -139,8 +139,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   spec.transition.integrator = model.discrete_time && vm["integrator"].defaulted()
                                    ? Integrator::kDiscrete
                                    : ParseIntegrator(vm["integrator"].as<std::string>());
-  if (const std::string e = CheckIntegratorForModel(spec.transition.integrator,
-                                                    model.discrete_time, model.name);
+  if (const std::string e =
+          CheckIntegratorForModel(spec.transition.integrator, model.discrete_time, model.name);
       !e.empty())
     throw InputError("--integrator: " + e);
   const std::string method = vm["method"].as<std::string>();

@@ -163,9 +163,9 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     if (cached_dt_ >= 0.0 && std::abs(dt - cached_dt_) <= 1e-12 * std::max(1.0, cached_dt_)) return;
     if constexpr (kDiscreteTime<Model>) {
       // A step map: Phi = dStep/dx, Gamma = dStep/du, d = Step(x*, u*) - x*.
-      step_.drift = StepMapJacobians<Model>(lin_.x_star, lin_.u_star, dt, params_, &step_.phi,
-                                            &step_.gamma) -
-                    lin_.x_star;
+      step_.drift =
+          StepMapJacobians<Model>(lin_.x_star, lin_.u_star, dt, params_, &step_.phi, &step_.gamma) -
+          lin_.x_star;
       cached_dt_ = dt;
       return;
     }

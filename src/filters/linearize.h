@@ -76,8 +76,8 @@ Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDi
                                                Mat<Model::kStateDim, Model::kStateDim>* F,
                                                Vec<double, Model::kStateDim>* G) {
   constexpr int N = Model::kStateDim;
-  *G = InputDerivative([&](double v) { return Model::template Step<double>(0.0, x, dt, v, params); },
-                       u);
+  *G = InputDerivative(
+      [&](double v) { return Model::template Step<double>(0.0, x, dt, v, params); }, u);
   return ValueAndJacobian<N, N>(
       [&](const auto& xj) {
         using T = typename std::decay_t<decltype(xj)>::Scalar;

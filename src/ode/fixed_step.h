@@ -24,27 +24,28 @@ Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kState
   if constexpr (kDiscreteTime<Model>) {
     return Model::template Step<T>(tt, x, h, u, p);  // MakeTransition admits kDiscrete only
   } else {
-  switch (scheme) {
-    case Integrator::kEuler:
-      return x + h * Model::Rhs(tt, x, u, p);
-    case Integrator::kSemiImplicitEuler: {
-      const State f = Model::Rhs(tt, x, u, p);
-      State next = x;
-      for (const auto& [pos, rate] : Model::kPositionRatePairs) next(rate) = x(rate) + h * f(rate);
-      const State g = Model::Rhs(tt, next, u, p);
-      for (const auto& [pos, rate] : Model::kPositionRatePairs) next(pos) = x(pos) + h * g(pos);
-      return next;
+    switch (scheme) {
+      case Integrator::kEuler:
+        return x + h * Model::Rhs(tt, x, u, p);
+      case Integrator::kSemiImplicitEuler: {
+        const State f = Model::Rhs(tt, x, u, p);
+        State next = x;
+        for (const auto& [pos, rate] : Model::kPositionRatePairs)
+          next(rate) = x(rate) + h * f(rate);
+        const State g = Model::Rhs(tt, next, u, p);
+        for (const auto& [pos, rate] : Model::kPositionRatePairs) next(pos) = x(pos) + h * g(pos);
+        return next;
+      }
+      case Integrator::kRk4:
+      default: {
+        const T half(t + 0.5 * h), full(t + h);
+        const State k1 = Model::Rhs(tt, x, u, p);
+        const State k2 = Model::Rhs(half, State(x + (0.5 * h) * k1), u, p);
+        const State k3 = Model::Rhs(half, State(x + (0.5 * h) * k2), u, p);
+        const State k4 = Model::Rhs(full, State(x + h * k3), u, p);
+        return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      }
     }
-    case Integrator::kRk4:
-    default: {
-      const T half(t + 0.5 * h), full(t + h);
-      const State k1 = Model::Rhs(tt, x, u, p);
-      const State k2 = Model::Rhs(half, State(x + (0.5 * h) * k1), u, p);
-      const State k3 = Model::Rhs(half, State(x + (0.5 * h) * k2), u, p);
-      const State k4 = Model::Rhs(full, State(x + h * k3), u, p);
-      return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-    }
-  }
   }
 }
 

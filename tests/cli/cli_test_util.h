@@ -83,7 +83,7 @@ inline std::vector<std::string> SplitLines(const std::string& text) {
 inline constexpr const char* kPendulumSimulate =
     "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 5 --dt 0.0125 "
     "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
-#define ESTLAB_TEST_PENDULUM_FILTER                                             \
+#define ESTLAB_TEST_PENDULUM_FILTER                                         \
   "filter --model pendulum --param g=9.8 --measure sin --integrator euler " \
   "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 "
 inline constexpr const char* kPendulumFilter = ESTLAB_TEST_PENDULUM_FILTER "--r-diag 0.1 ";
@@ -117,7 +117,6 @@ inline RunResult RunEstlab(const std::string& args, const std::string& cwd) {
   std::filesystem::remove(capture + ".err");
   return r;
 }
-
 
 }  // namespace estlab::testing
 

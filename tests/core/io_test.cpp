@@ -4,13 +4,13 @@
 #include <cmath>
 #include <set>
 
+#include "error_text.h"
 #include "src/core/random.h"
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/run/filter_spec.h"
-#include "error_text.h"
 
 namespace estlab {
 namespace {

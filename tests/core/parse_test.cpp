@@ -4,9 +4,9 @@
 
 #include <string>
 
+#include "error_text.h"
 #include "src/core/parse.h"
 #include "src/core/types.h"
-#include "error_text.h"
 
 namespace estlab {
 namespace {

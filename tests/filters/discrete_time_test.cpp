@@ -44,8 +44,7 @@ struct DiscreteLinear {
       {"b", &Params::b, "step factor", Constraint::kAny},
   }};
   template <class T>
-  static Vec<T, 3> Step(const T& /*t*/, const Vec<T, 3>& x, double dt, double u,
-                        const Params& p) {
+  static Vec<T, 3> Step(const T& /*t*/, const Vec<T, 3>& x, double dt, double u, const Params& p) {
     Vec<T, 3> next;
     next(0) = x(0) + dt * x(1);
     next(1) = (1.0 - p.a * dt) * x(1) + dt * x(2) + dt * u;
@@ -128,8 +127,7 @@ TEST(DiscreteTimeTest, IntegratorMustMatchTheModel) {
       (void)MakeTransition<DL>(DL::Params{}, o);
       ADD_FAILURE() << IntegratorName(i) << " accepted for a discrete-time model";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("'discrete-linear' is discrete-time"),
-                std::string::npos)
+      EXPECT_NE(std::string(e.what()).find("'discrete-linear' is discrete-time"), std::string::npos)
           << e.what();
     }
   }
@@ -158,7 +156,8 @@ TEST_F(DiscreteFilterTest, KfLinearisesTheMapExactly) {
   elsewhere.operating_input = 0.7;
   for (const KfOptions& o : {KfOptions{}, elsewhere}) {
     LinearizedKf<DL, DL::Pair> kf(params_, o);
-    EXPECT_TRUE(DeviationBelow(CompareWithReference<DL, DL::Pair>(kf, ref_, data_, data_.Q), 1e-10));
+    EXPECT_TRUE(
+        DeviationBelow(CompareWithReference<DL, DL::Pair>(kf, ref_, data_, data_.Q), 1e-10));
   }
 }
 

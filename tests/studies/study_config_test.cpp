@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <fstream>
 
+#include "error_text.h"
 #include "src/core/types.h"
 #include "studies/study_results.h"
-#include "error_text.h"
 #include "study_test_util.h"
 
 namespace estlab {
