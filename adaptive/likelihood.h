@@ -63,6 +63,7 @@
 #include <vector>
 
 #include "adaptive/likelihood_setup.h"
+#include "adaptive/physical_params.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
 #include "models/model_traits.h"
@@ -101,10 +102,13 @@ class InnovationLikelihood {
   InnovationLikelihood(const FilterSpec& spec, const TunerOptions& options,
                        const std::vector<FilterData>& datasets);
 
-  int NumParams() const { return q_.NumParams() + r_.NumParams(); }
+  // theta = [Q's | R's | the physical parameters'] (physical_params.h).
+  int NumNoiseParams() const { return q_.NumParams() + r_.NumParams(); }
+  int NumParams() const { return NumNoiseParams() + phys_.NumParams(); }
   std::vector<double> InitialTheta() const;
   std::vector<std::string> ParamNames() const;
   std::vector<bool> ParamIsLog() const;
+  const PhysicalParams<Model>& physical() const { return phys_; }
   const CovarianceParam<kN>& q_param() const { return q_; }
   const CovarianceParam<kM>& r_param() const { return r_; }
   long NumTerms() const { return terms_; }  // updates after burn-in, all datasets
@@ -125,9 +129,16 @@ class InnovationLikelihood {
   template <class T>
   using Sink = std::function<void(const MeasT<T>& whitened, const T& log_det)>;
   template <class T>
-  bool Run(const T* theta, const Sink<T>& sink, std::string* why = nullptr) const;
+  bool Run(const T* theta, const Sink<T>& sink, std::string* why = nullptr) const {
+    if constexpr (EstimableParams<Model>) {
+      if (!phys_.empty())
+        return RunWith<T>(theta, phys_.template At<T>(theta + NumNoiseParams()), sink, why);
+    }
+    return RunWith<T>(theta, params_, sink, why);
+  }
 
-  // NLL(theta); false when the filter fails.
+  // NLL(theta) (+ the physical parameters' prior terms); false when the
+  // filter fails.
   template <class T>
   bool Nll(const T* theta, T* nll, std::string* why = nullptr) const {
     T sum(0.0);
@@ -137,6 +148,7 @@ class InnovationLikelihood {
           sum -= GaussianLogLikelihood<kM, T>(e, log_det);
         },
         why);
+    phys_.ForEachPriorResidual(theta + NumNoiseParams(), [&](const T& r) { sum += 0.5 * r * r; });
     *nll = sum;
     return ok && std::isfinite(ScalarPart(sum));
   }
@@ -151,6 +163,11 @@ class InnovationLikelihood {
   void SetUpKf(const KfOptions& options, const std::vector<FilterData>& datasets);
   void SetUpCvodes(TransitionOptions o);
 
+  // Run() with the model parameters p: Params, or ParamsT<T> when physical
+  // parameters are estimated.
+  template <class T, class P>
+  bool RunWith(const T* theta, const P& p, const Sink<T>& sink, std::string* why) const;
+
   // The belief of one run, of scalar T, and the sigma points' storage.
   template <class T>
   struct Belief {
@@ -160,21 +177,23 @@ class InnovationLikelihood {
     PointsT<T, kM> measurement_points;
     bool have_propagated = false;
   };
-  template <class T>
-  bool Predict(Belief<T>* b, double t0, double t1, double u, const StateCovT<T>& Q,
+  template <class T, class P>
+  bool Predict(Belief<T>* b, double t0, double t1, double u, const StateCovT<T>& Q, const P& p,
                std::string* why) const;
-  template <class T>
-  bool Update(Belief<T>* b, const Vec<double, kM>& z, const MeasCovT<T>& R, MeasT<T>* whitened,
-              T* log_det, std::string* why) const;
+  template <class T, class P>
+  bool Update(Belief<T>* b, const Vec<double, kM>& z, const MeasCovT<T>& R, const P& p,
+              MeasT<T>* whitened, T* log_det, std::string* why) const;
   // x- = Phi(x) (and F = dPhi/dx when F is not null) for scalar T: the
   // CVODES transition for double, AD through the fixed-step integrator
   // otherwise (a nested Jet for F when T is a Jet).
-  template <class T>
-  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, double u, StateCovT<T>* F) const;
+  template <class T, class P>
+  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, double u, const P& p,
+                      StateCovT<T>* F) const;
 
   FilterSpec spec_;
   TunerOptions options_;
   Params params_;
+  PhysicalParams<Model> phys_;
   std::vector<const FilterData*> datasets_;
   Vec<double, kN> x0_;
   Mat<kN, kN> p0_;
@@ -217,6 +236,7 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     : spec_(likelihood_internal::CheckSpec<Model, Meas>(spec, options, datasets)),
       options_(options),
       params_(ParamsFromVector<Model>(spec.params)),
+      phys_(options.estimate, spec.params),
       dt_ref_(likelihood_internal::MedianStep(datasets.front())),
       q_(options.q_param, "q", likelihood_internal::StateNames<Model>(),
          likelihood_internal::Pairs<Model>(), likelihood_internal::InitialQ<Model>(spec),
@@ -279,6 +299,8 @@ std::vector<double> InnovationLikelihood<Model, Meas>::InitialTheta() const {
   std::vector<double> theta = q_.InitialTheta();
   const auto& r = r_.InitialTheta();
   theta.insert(theta.end(), r.begin(), r.end());
+  const auto& phys = phys_.InitialTheta();
+  theta.insert(theta.end(), phys.begin(), phys.end());
   return theta;
 }
 
@@ -287,6 +309,8 @@ std::vector<std::string> InnovationLikelihood<Model, Meas>::ParamNames() const {
   std::vector<std::string> names = q_.Names();
   const auto& r = r_.Names();
   names.insert(names.end(), r.begin(), r.end());
+  const auto& phys = phys_.Names();
+  names.insert(names.end(), phys.begin(), phys.end());
   return names;
 }
 
@@ -295,13 +319,14 @@ std::vector<bool> InnovationLikelihood<Model, Meas>::ParamIsLog() const {
   std::vector<bool> out = q_.IsLog();
   const auto& r = r_.IsLog();
   out.insert(out.end(), r.begin(), r.end());
+  for (int j = 0; j < phys_.NumParams(); ++j) out.push_back(phys_.IsLog(j));
   return out;
 }
 
 template <class Model, class Meas>
-template <class T>
-bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
-                                            std::string* why) const {
+template <class T, class P>
+bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, const Sink<T>& sink,
+                                                std::string* why) const {
   std::string reason;
   auto fail = [&](const FilterData& d, size_t k, const std::string& what) {
     if (why != nullptr) {
@@ -331,7 +356,9 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
   }
   for (const FilterData* data : datasets_) {
     const FilterData& d = *data;
-    if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(params_, cvodes_options_);
+    if constexpr (std::is_same_v<P, Params>) {
+      if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(p, cvodes_options_);
+    }
     b.x = x0_.template cast<T>();
     b.P = p0_.template cast<T>();
     b.have_propagated = false;
@@ -342,7 +369,7 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
         Q = q_.template Matrix<T>(theta_q, q_dt);
       }
       try {
-        if (!Predict<T>(&b, t0, t1, u, Q, &reason))
+        if (!Predict<T>(&b, t0, t1, u, Q, p, &reason))
           return fail(d, k, "prediction failed: " + reason);
       } catch (const NumericalError& e) {  // CVODES failed
         if (why != nullptr) *why = e.what();
@@ -354,7 +381,7 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
       if (z != nullptr) {
         MeasT<T> e;
         T log_det;
-        if (!Update<T>(&b, *z, R, &e, &log_det, &reason))
+        if (!Update<T>(&b, *z, R, p, &e, &log_det, &reason))
           return fail(d, k, "update failed: " + reason);
         if (update_index >= options_.burn_in) sink(e, log_det);
         ++update_index;
@@ -369,10 +396,10 @@ bool InnovationLikelihood<Model, Meas>::Run(const T* theta, const Sink<T>& sink,
 }
 
 template <class Model, class Meas>
-template <class T>
+template <class T, class P>
 typename InnovationLikelihood<Model, Meas>::template StateT<T>
 InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, double t1, double u,
-                                             StateCovT<T>* F) const {
+                                             const P& p, StateCovT<T>* F) const {
   if constexpr (std::is_same_v<T, double>) {
     if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
       cvodes_->SetInput(u);
@@ -381,20 +408,20 @@ InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, doub
   }
   const Integrator scheme = spec_.transition.integrator;
   const int substeps = spec_.transition.substeps;
-  const Params& p = params_;
   if (F == nullptr) return FixedPropagate<Model, T>(scheme, x, t0, t1, substeps, u, p);
   return ValueAndJacobianT<kN, kN>(
       [&](const auto& xs) {
         using S = typename std::decay_t<decltype(xs)>::Scalar;
-        return FixedPropagate<Model, S>(scheme, xs, t0, t1, substeps, u, p);
+        return FixedPropagate<Model, S>(scheme, xs, t0, t1, substeps, u, ParamsAs<Model, S>(p));
       },
       x, F);
 }
 
 template <class Model, class Meas>
-template <class T>
+template <class T, class P>
 bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double t1, double u,
-                                                const StateCovT<T>& Q, std::string* why) const {
+                                                const StateCovT<T>& Q, const P& p,
+                                                std::string* why) const {
   if (kf_) {
     const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
     if (step == nullptr) {  // cannot happen: SetUpKf saw every step
@@ -410,13 +437,13 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
       return false;
     }
     for (Eigen::Index i = 0; i < b->points.cols(); ++i)
-      b->propagated.col(i) = Propagate<T>(StateT<T>(b->points.col(i)), t0, t1, u, nullptr);
+      b->propagated.col(i) = Propagate<T>(StateT<T>(b->points.col(i)), t0, t1, u, p, nullptr);
     SigmaPredictMoments<kN, T>(sigma_set_, b->propagated, Q, &b->x, &b->P);
     b->have_propagated = true;
   } else {
     // x- = Phi(x), F = dPhi/dx;  P- = F P F^T + Q
     StateCovT<T> F;
-    b->x = Propagate<T>(b->x, t0, t1, u, &F);
+    b->x = Propagate<T>(b->x, t0, t1, u, p, &F);
     b->P = EkfPredictCovariance<kN, T>(F, b->P, Q);
   }
   if (!BeliefFinite<kN, T>(b->x, b->P)) {
@@ -427,10 +454,10 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
 }
 
 template <class Model, class Meas>
-template <class T>
+template <class T, class P>
 bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z,
-                                               const MeasCovT<T>& R, MeasT<T>* whitened, T* log_det,
-                                               std::string* why) const {
+                                               const MeasCovT<T>& R, const P& p, MeasT<T>* whitened,
+                                               T* log_det, std::string* why) const {
   GaussianUpdate<T, kN, kM> u;
   FilterStatus status;
   if (kf_) {
@@ -445,9 +472,9 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
     }
     status =
         SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                    &b->measurement_points, b->x, b->P, z, R, params_, &u, why);
+                                    &b->measurement_points, b->x, b->P, z, R, p, &u, why);
   } else {
-    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, params_, iterations_, &u, why);
+    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, p, iterations_, &u, why);
   }
   if (status != FilterStatus::kOk) return false;
   Whiten<kM, T>(u.L, u.nu, whitened, log_det);

@@ -42,6 +42,7 @@
 #define ESTLAB_ADAPTIVE_TUNER_H_
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,21 @@ enum class TunerForm {
 };
 TunerForm ParseTunerForm(const std::string& name);
 const char* TunerFormName(TunerForm form);
+
+// A physical parameter of the model estimated together with Q and R
+// (`estlab tune --estimate-param`, prediction-error maximum likelihood). A
+// parameter constrained > 0 is optimised as log p, any other as p itself.
+struct EstimatedParam {
+  std::string name;  // as in the model's parameter table
+  // Bounds on the natural scale; NaN: from the constraint (>= 0 gives a
+  // lower bound 0) and, on the log scale, the initial value +- bound_width.
+  double lower = std::numeric_limits<double>::quiet_NaN();
+  double upper = std::numeric_limits<double>::quiet_NaN();
+  // Gaussian prior N(mean, sd^2) on the natural scale: adds
+  // 1/2 ((p - mean) / sd)^2 to the NLL (sd > 0 when has_prior).
+  bool has_prior = false;
+  double prior_mean = 0.0, prior_sd = 0.0;
+};
 
 struct TunerOptions {
   NoiseParam q_param = NoiseParam::kDiag;
@@ -102,6 +118,10 @@ struct TunerOptions {
   double hessian_step = 1e-4;
   // A log parameter whose SE exceeds this is "poorly identified".
   double poorly_identified_se = 1.0;
+
+  // Physical parameters estimated with Q and R (their initial values are the
+  // spec's params). Empty: Q and R only.
+  std::vector<EstimatedParam> estimate;
 
   // The least-squares form's log-determinant residual sqrt(log det S_k + c):
   // c = log_det_margin * m - min_k log det S_k at the start point (>= 0).
@@ -146,6 +166,23 @@ struct TuneResult {
   std::vector<bool> poorly_identified;
   std::vector<bool> at_bound;
   bool hessian_positive_definite = false;
+
+  // Which entries of theta are physical parameters (the last ones, after Q's
+  // and R's), and those parameters on their natural scale: the estimate, its
+  // standard error (delta method for log p: SE_p = p SE_log) and the
+  // initial value. An infinite SE has its reason in `identifiability`.
+  std::vector<bool> is_physical;
+  std::vector<std::string> param_names;
+  std::vector<double> param_initial, param_values, param_std_errors;
+
+  // The correlation matrix of theta (k x k, row-major; NaN where a
+  // parameter is not identifiable), the eigenvalues of the observed Fisher
+  // information H (ascending), and one sentence per direction the data do
+  // not pin down (an eigenvalue below identifiable_ratio * max or with an SE
+  // along it above 10 log units), naming the combination they do pin down.
+  std::vector<double> correlation;
+  std::vector<double> fisher_eigenvalues;
+  std::vector<std::string> identifiability;
 
   // Tuned noise. Q and R row-major (n x n, m x m); for white-accel Q is
   // qc * Q_wa(dt_ref) at the median step dt_ref of the first dataset.

@@ -47,6 +47,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/identifiability.h"
 #include "adaptive/likelihood.h"
 #include "adaptive/tuner.h"
 #include "src/core/random.h"
@@ -93,7 +94,10 @@ class Objective {
     return std::isfinite(*nll);
   }
 
-  long NumResiduals() const { return lik_.NumTerms() * (kM + 1); }
+  // (m + 1) per update, then one per prior of a physical parameter.
+  long NumResiduals() const {
+    return lik_.NumTerms() * (kM + 1) + lik_.physical().NumPriors();
+  }
 
   // The least-squares residuals; jacobian (row-major NumResiduals x K) may be
   // null.
@@ -187,6 +191,8 @@ class Objective {
           if (!(ScalarPart(arg) > 0)) positive = false;
           residuals[at++] = positive ? sqrt(arg) : T(0.0);
         });
+    lik_.physical().ForEachPriorResidual(theta + lik_.NumNoiseParams(),
+                                         [&](const T& r) { residuals[at++] = r; });
     return ok && positive && at == NumResiduals();
   }
 
@@ -331,13 +337,13 @@ inline std::vector<std::vector<double>> StartPoints(const TunerOptions& o,
   return points;
 }
 
-// theta with Q and R scaled by e^s: log parameters + s, off-diagonal
-// Cholesky entries * e^(s/2).
+// theta with Q and R (its first `noise` entries) scaled by e^s: log
+// parameters + s, off-diagonal Cholesky entries * e^(s/2). The physical
+// parameters after them stay.
 inline std::vector<double> ScaleShifted(const std::vector<double>& theta,
-                                        const std::vector<bool>& is_log, double s) {
+                                        const std::vector<bool>& is_log, int noise, double s) {
   std::vector<double> out(theta);
-  for (size_t i = 0; i < out.size(); ++i)
-    out[i] = is_log[i] ? out[i] + s : out[i] * std::exp(0.5 * s);
+  for (int i = 0; i < noise; ++i) out[i] = is_log[i] ? out[i] + s : out[i] * std::exp(0.5 * s);
   return out;
 }
 
@@ -346,11 +352,11 @@ inline std::vector<double> ScaleShifted(const std::vector<double>& theta,
 // no shifted point is better than theta itself.
 template <class Model, class Meas>
 double ScaleSearch(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
-                   const std::vector<bool>& is_log, const std::vector<double>& lower,
+                   const std::vector<bool>& is_log, int noise, const std::vector<double>& lower,
                    const std::vector<double>& upper) {
   double lo = -8.0, hi = 8.0;
   bool any_log = false;
-  for (size_t i = 0; i < theta.size(); ++i) {
+  for (int i = 0; i < noise; ++i) {
     if (!is_log[i]) continue;
     any_log = true;
     lo = std::max(lo, lower[i] - theta[i]);
@@ -358,7 +364,7 @@ double ScaleSearch(const Objective<Model, Meas>& objective, const std::vector<do
   }
   if (!any_log || !(lo < hi)) return 0.0;
   auto nll = [&](double s) {
-    const std::vector<double> t = ScaleShifted(theta, is_log, s);
+    const std::vector<double> t = ScaleShifted(theta, is_log, noise, s);
     double f = kInf;
     return objective.Value(t.data(), &f) && std::isfinite(f) ? f : kInf;
   };
@@ -455,14 +461,15 @@ TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOp
   return start;
 }
 
-// Standard errors from the curvature; false when H is not positive definite.
+// The observed Fisher information: H_ij = d g_j / d theta_i by central
+// differences of the exact gradient g; false when the filter fails within a
+// step of theta.
 template <class Model, class Meas>
-bool StandardErrors(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
-                    double step, std::vector<double>* se) {
+bool ObservedFisher(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
+                    double step, Eigen::MatrixXd* fisher) {
   const int k = objective.NumParams();
-  se->assign(k, kInf);
-  if (k == 0) return true;
-  Eigen::MatrixXd H(k, k);
+  Eigen::MatrixXd& H = *fisher;
+  H.setZero(k, k);
   std::vector<double> plus(k), minus(k), x(theta);
   double f = 0.0;
   for (int i = 0; i < k; ++i) {
@@ -473,16 +480,47 @@ bool StandardErrors(const Objective<Model, Meas>& objective, const std::vector<d
     x[i] = theta[i];
     for (int j = 0; j < k; ++j) H(i, j) = (plus[j] - minus[j]) / (2.0 * step);
   }
-  const Eigen::MatrixXd Hs = 0.5 * (H + H.transpose());
-  if (!Hs.allFinite()) return false;
-  const Eigen::LLT<Eigen::MatrixXd> llt(Hs);
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(k, k));
-  for (int i = 0; i < k; ++i) {
-    if (!(cov(i, i) > 0)) return false;
-    (*se)[i] = std::sqrt(cov(i, i));
+  return H.allFinite();
+}
+
+// Standard errors, correlations and the identifiability sentences
+// (adaptive/identifiability.h), and the physical parameters on their
+// natural scale.
+template <class Model, class Meas>
+void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions& options,
+                     TuneResult* result) {
+  const int k = objective.NumParams();
+  if (!options.compute_std_errors) {
+    result->std_errors.assign(k, kInf);
+    result->identifiability.push_back("standard errors not computed (compute_std_errors off)");
+  } else {
+    Eigen::MatrixXd H;
+    if (!ObservedFisher(objective, result->theta, options.hessian_step, &H))
+      H.setConstant(k, k, std::numeric_limits<double>::quiet_NaN());
+    FisherReport report = AnalyseFisher(H, result->theta, result->names, result->is_log);
+    result->std_errors = report.std_errors;
+    result->correlation = report.correlation;
+    result->fisher_eigenvalues = report.eigenvalues;
+    result->identifiability = report.sentences;
+    result->hessian_positive_definite = report.positive_definite;
   }
-  return true;
+  const auto& phys = objective.likelihood().physical();
+  const int first = objective.likelihood().NumNoiseParams();
+  if (!phys.empty()) {  // every parameter, defaults filled in
+    const typename Model::Params nominal = ParamsFromVector<Model>(result->tuned_spec.params);
+    result->tuned_spec.params.clear();
+    for (const auto& spec : Model::kParams) result->tuned_spec.params.push_back(nominal.*spec.member);
+  }
+  for (int j = 0; j < phys.NumParams(); ++j) {
+    const int i = first + j;
+    result->param_names.push_back(Model::kParams[phys.ModelIndex(j)].name);
+    result->param_initial.push_back(phys.Natural(j, result->theta_initial[i]));
+    const double value = phys.Natural(j, result->theta[i]);
+    result->param_values.push_back(value);
+    result->param_std_errors.push_back(phys.IsLog(j) ? value * result->std_errors[i]
+                                                     : result->std_errors[i]);
+    result->tuned_spec.params[phys.ModelIndex(j)] = value;
+  }
 }
 
 }  // namespace tuner_internal
@@ -507,22 +545,36 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   result.r_param = options.r_param;
   result.dt_ref = lik.dt_ref();
   result.updates = lik.NumTerms();
+  // Q's and R's log parameters take the common-scale search and the start
+  // spread; the physical parameters keep their initial values there.
+  const int noise = lik.NumNoiseParams();
+  std::vector<bool> scaled(result.is_log);
+  for (int i = 0; i < k; ++i) {
+    result.is_physical.push_back(i >= noise);
+    if (i >= noise) scaled[i] = false;
+  }
   std::vector<double> lower, upper;
-  ResolveBounds(options, result.theta_initial, result.is_log, &lower, &upper);
+  {
+    const std::vector<double> noise_theta(result.theta_initial.begin(),
+                                          result.theta_initial.begin() + noise);
+    const std::vector<bool> noise_log(result.is_log.begin(), result.is_log.begin() + noise);
+    ResolveBounds(options, noise_theta, noise_log, &lower, &upper);
+    lik.physical().Bounds(options.bound_width, &lower, &upper);
+  }
   if (!lik.Nll(result.theta_initial.data(), &result.nll_initial) ||
       !std::isfinite(result.nll_initial))
     result.nll_initial = kInf;
 
   // Multi-start.
-  const auto points = StartPoints(options, result.theta_initial, result.is_log, lower, upper);
+  const auto points = StartPoints(options, result.theta_initial, scaled, lower, upper);
   std::vector<bool> converged(points.size(), false);
   for (size_t s = 0; s < points.size(); ++s) {
     bool conv = false;
     std::vector<double> from = points[s];
     double shift = 0.0;
     if (k > 0 && options.scale_search) {
-      shift = ScaleSearch(objective, from, result.is_log, lower, upper);
-      from = ScaleShifted(from, result.is_log, shift);
+      shift = ScaleSearch(objective, from, result.is_log, noise, lower, upper);
+      from = ScaleShifted(from, result.is_log, noise, shift);
     }
     if (k == 0) {
       TuneStart st;
@@ -590,16 +642,13 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   result.tuned_spec.r = result.r;
 
   // Standard errors and identifiability.
-  if (options.compute_std_errors) {
-    result.hessian_positive_definite =
-        StandardErrors(objective, result.theta, options.hessian_step, &result.std_errors);
-  } else {
-    result.std_errors.assign(k, kInf);
-  }
+  FillUncertainty(objective, options, &result);
   std::vector<int> off_row = lik.q_param().OffDiagonalRow();
   for (int row : lik.r_param().OffDiagonalRow()) off_row.push_back(row);
+  off_row.resize(k, -1);  // the physical parameters
   for (int i = 0; i < k; ++i) {
     double limit = options.poorly_identified_se;
+    if (result.is_physical[i] && !result.is_log[i]) limit = std::abs(result.theta[i]);
     if (off_row[i] >= 0) {
       const bool in_q = i < lik.q_param().NumParams();
       limit = std::sqrt(in_q ? Q(off_row[i], off_row[i]) : R(off_row[i], off_row[i]));

@@ -30,19 +30,23 @@ struct Pendulum {
   static constexpr std::array<bool, 2> kAngleStates = {true, false};
   static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
 
-  struct Params {
-    double g = 9.81;
-    double L = 1.0;
-    double b = 0.0;
+  // Generic over the scalar S so that L, b, g can be estimated
+  // (models/model_params.h); Params is the double one.
+  template <class S = double>
+  struct ParamsT {
+    S g = S(9.81);
+    S L = S(1.0);
+    S b = S(0.0);
   };
+  using Params = ParamsT<>;
   static constexpr std::array<ParamSpec<Params>, 3> kParams = {{
       {"g", &Params::g, "gravity [m/s^2]", Constraint::kPositive},
       {"L", &Params::L, "length [m]", Constraint::kPositive},
       {"b", &Params::b, "viscous damping [1/s]", Constraint::kNonNegative},
   }};
 
-  template <class T>
-  static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double /*u*/, const Params& p) {
+  template <class T, class P>
+  static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double /*u*/, const P& p) {
     using std::sin;
     Vec<T, 2> dx;
     dx(0) = x(1);
@@ -64,8 +68,8 @@ struct Pendulum {
     static constexpr int kDim = 1;
     static constexpr std::array<const char*, 1> kOutputs = {"theta"};
     static constexpr std::array<bool, 1> kAngleOutputs = {true};
-    template <class T>
-    static Vec<T, 1> Eval(const Vec<T, 2>& x, const Params& /*p*/) {
+    template <class T, class P>
+    static Vec<T, 1> Eval(const Vec<T, 2>& x, const P& /*p*/) {
       return Vec<T, 1>(x(0));
     }
   };
@@ -74,8 +78,8 @@ struct Pendulum {
     static constexpr int kDim = 1;
     static constexpr std::array<const char*, 1> kOutputs = {"sin_theta"};
     static constexpr std::array<bool, 1> kAngleOutputs = {false};
-    template <class T>
-    static Vec<T, 1> Eval(const Vec<T, 2>& x, const Params& /*p*/) {
+    template <class T, class P>
+    static Vec<T, 1> Eval(const Vec<T, 2>& x, const P& /*p*/) {
       using std::sin;
       return Vec<T, 1>(sin(x(0)));
     }

@@ -12,6 +12,7 @@
 #include "src/core/parse.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "src/options/estimate_flags.h"
 #include "src/options/filter_flags.h"
 #include "src/registry/registry.h"
 
@@ -40,6 +41,25 @@ constexpr const char* kExamples = R"(Examples:
   estlab tune --model double-pendulum --measure angles --filter ukf --alpha 1 --data a.csv \
       --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
       --init-r-scalar 0.01 --starts 4 --burn-in 20 --form least-squares --json
+  # Estimate the length and damping with Q and R (prediction-error ML), the
+  # damping kept in [0, 5], and write them for 'estlab filter --config':
+  estlab tune --model pendulum --measure angle --filter ekf --integrator rk4 --data train.csv \
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --param L=0.8,b=0.1 --estimate-param L,b \
+      --param-bounds b=0:5 --init-q-white-accel 1e-3 --init-r-diag 1e-3 --out tuned.ini
+
+Physical parameters (--estimate-param): the named model parameters join
+Q and R in theta, from their --param values: log p for a parameter that must
+be > 0, p itself otherwise (a >= 0 one gets the bound 0). --param-bounds
+gives natural-scale bounds (else initial value * e^+-bound-width on the log
+scale), --param-prior adds 1/2 ((p - mean) / sd)^2 to the NLL. Gradients are
+exact (AD through the filter and the fixed-step integrator; with cvodes,
+central differences as for Q and R). The report gives each estimate with its
+standard error from the observed Fisher information (the Hessian of the NLL),
+and names every direction that the data do not pin down ("g and L are not
+separately identifiable: the data pin down only g/L = ..."). The kf is not
+supported (it linearises once, at the nominal parameters); the model's
+parameters must be generic over the scalar (built-in: pendulum; every model
+file).
 
 Tuning: minimises NLL = 1/2 sum_k [log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi]
 over the innovations nu_k (covariance S_k) of every dataset after --burn-in
@@ -256,6 +276,22 @@ Validation Validate(const po::variables_map& vm, const ModelEntry& model, const 
   return v;
 }
 
+// The estimated physical parameters, on their natural scale, and what the
+// observed Fisher information says about them.
+void PrintPhysical(const TuneResult& r) {
+  if (!r.param_names.empty()) {
+    std::cout << "\n  model parameter               initial     estimate         SE\n";
+    const size_t first = r.names.size() - r.param_names.size();
+    for (size_t j = 0; j < r.param_names.size(); ++j) {
+      std::cout << "  " << std::left << std::setw(26) << r.param_names[j] << std::right
+                << std::setw(12) << r.param_initial[j] << " " << std::setw(12)
+                << r.param_values[j] << " " << std::setw(10) << r.param_std_errors[j]
+                << (r.at_bound[first + j] ? "  at a bound" : "") << "\n";
+    }
+  }
+  for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
+}
+
 void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
                 const std::optional<Validation>& validation, const std::string& out_path) {
   const int n = int(model.states.size());
@@ -281,6 +317,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
               << (r.poorly_identified[i] ? "  poorly identified by this data" : "")
               << (r.at_bound[i] ? "  at a bound" : "") << "\n";
   }
+  PrintPhysical(r);
   std::cout << "\ntuned Q"
             << (r.q_white_accel ? " (qc = " + FormatNumber(r.qc) +
                                       ", shown at dt = " + FormatNumber(r.dt_ref) + ")"
@@ -332,6 +369,16 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     WriteTuned(&j, r.q_param, r.q_white_accel, r.qc, r.q, n);
     j.Key("r");
     WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
+    j.Key("params").BeginObject();
+    for (size_t i = 0; i < r.param_names.size(); ++i) j.Key(r.param_names[i]).Value(r.param_values[i]);
+    j.EndObject().EndObject();
+    j.Key("std_errors").BeginObject();
+    for (size_t i = 0; i < r.param_names.size(); ++i)
+      j.Key(r.param_names[i]).Value(r.param_std_errors[i]);
+    j.EndObject();
+    j.Key("params_initial").BeginObject();
+    for (size_t i = 0; i < r.param_names.size(); ++i)
+      j.Key(r.param_names[i]).Value(r.param_initial[i]);
     j.EndObject();
     j.Key("q_matrix");
     WriteMatrix(&j, r.q, n);
@@ -346,6 +393,13 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   for (size_t i = 0; i < r.poorly_identified.size(); ++i)
     if (r.poorly_identified[i]) poor.push_back(r.names[i]);
   j.Key("poorly_identified").Value(poor);
+  std::vector<std::string> at_bound;
+  for (size_t i = 0; i < r.at_bound.size(); ++i)
+    if (r.at_bound[i]) at_bound.push_back(r.names[i]);
+  j.Key("at_bound").Value(at_bound);
+  j.Key("correlation").Value(r.correlation);
+  j.Key("fisher_eigenvalues").Value(r.fisher_eigenvalues);
+  j.Key("identifiability").Value(r.identifiability);
   j.Key("nll_initial").Value(r.nll_initial).Key("nll_tuned").Value(r.nll_tuned);
   j.Key("updates").Value(r.updates);
   j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
@@ -408,6 +462,12 @@ int RunTune(const std::vector<std::string>& args) {
       "lower bound(s) of the log parameters: one, or one per parameter")(
       "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
       "max-iterations", po::value<int>()->default_value(200), "Ceres iterations per start")(
+      "estimate-param", po::value<std::string>(),
+      "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
+      "param-bounds", po::value<std::string>(),
+      "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
+      "param-prior", po::value<std::string>(),
+      "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
       "validate", po::value<std::string>(), "validation data CSV")(
       "true-q-diag", po::value<std::string>(),
       "validation: true Q diagonal (else <validate>.json)")(
@@ -460,6 +520,9 @@ int RunTune(const std::vector<std::string>& args) {
   options.log_upper = BoundList(vm, "log-upper");
   options.max_iterations = vm["max-iterations"].as<int>();
   options.seed = SeedOf(settings);
+  auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
+  options.estimate =
+      ParseEstimatedParams(text("estimate-param"), text("param-bounds"), text("param-prior"));
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
 
@@ -487,6 +550,9 @@ int RunTune(const std::vector<std::string>& args) {
                   << " (" << TuneStatusName(result.status) << ")\n";
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
     out->stream() << IniLine("r", result.r_param, false, 0.0, result.r, m);
+    for (size_t i = 0; i < result.param_names.size(); ++i)
+      out->stream() << "param = " << result.param_names[i] << "="
+                    << FormatDouble(result.param_values[i]) << "\n";
     out->Commit();
   }
   if (vm.count("json")) {

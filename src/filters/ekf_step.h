@@ -41,11 +41,11 @@ MatT<T, N, N> EkfPredictCovariance(const MatT<T, N, N>& F, const MatT<T, N, N>& 
 
 // The (iterated) EKF update of (x-, P-) with measurement z and noise R.
 // Returns kOk, or a failure status with the reason in *why (set only then).
-template <class Model, class Meas, class T = double>
+template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
                        const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                        const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                       const typename Model::Params& params, int iterations,
+                       const Prm& params, int iterations,
                        GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;

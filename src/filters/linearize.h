@@ -19,6 +19,7 @@
 #include <cmath>
 #include <type_traits>
 
+#include "models/model_params.h"
 #include "src/core/types.h"
 #include "src/ode/autodiff.h"
 #include "src/ode/nested_jet.h"
@@ -89,9 +90,11 @@ Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDi
 // h(x), and H = dh/dx (x) by automatic differentiation when H is not null,
 // for x of any scalar T (double; ceres::Jet, whose H is then a nested Jet:
 // src/ode/nested_jet.h).
-template <class Model, class Meas, class T = double>
+// Prm: Params, or ParamsT<T> when parameters are estimated (lifted to the
+// nested Jet inside the Jacobian).
+template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 Vec<T, Meas::kDim> MeasurementAndJacobian(
-    const Vec<T, Model::kStateDim>& x, const typename Model::Params& params,
+    const Vec<T, Model::kStateDim>& x, const Prm& params,
     std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
@@ -99,7 +102,7 @@ Vec<T, Meas::kDim> MeasurementAndJacobian(
   return ValueAndJacobianT<M, N>(
       [&](const auto& xj) {
         using S = typename std::decay_t<decltype(xj)>::Scalar;
-        return Meas::template Eval<S>(xj, params);
+        return Meas::template Eval<S>(xj, ParamsAs<Model, S>(params));
       },
       x, H);
 }

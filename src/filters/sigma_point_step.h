@@ -76,13 +76,12 @@ void SigmaPredictMoments(const SigmaPointSet& set, const PointsT<T, N>& propagat
 
 // The update of (x-, P-) with points Y; *Z is a preallocated workspace
 // (M x count). Returns kOk, or a failure status with the reason in *why.
-template <class Model, class Meas, class T = double>
+template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStateDim>& Y,
                          PointsT<T, Meas::kDim>* Z, const Vec<T, Model::kStateDim>& x_prior,
                          const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                          const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                         const typename Model::Params& params,
-                         GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
+                         const Prm& params, GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   // Z_i = h(Y_i),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)

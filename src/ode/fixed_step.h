@@ -16,9 +16,11 @@
 
 namespace estlab {
 
-template <class Model, class T>
+// Prm: the model's Params, or ParamsT<T> for parameters being estimated
+// (models/model_params.h).
+template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kStateDim>& x, double t,
-                                   double h, double u, const typename Model::Params& p) {
+                                   double h, double u, const Prm& p) {
   using State = Vec<T, Model::kStateDim>;
   const T tt(t);
   if constexpr (kDiscreteTime<Model>) {
@@ -63,13 +65,12 @@ inline int RhsEvalsPerStep(Integrator scheme) {
 }
 
 // `substeps` equal steps from t0 to t1.
-template <class Model, class T>
+template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::kStateDim>& x0,
-                                        double t0, double t1, int substeps, double u,
-                                        const typename Model::Params& p) {
+                                        double t0, double t1, int substeps, double u, const Prm& p) {
   const double h = (t1 - t0) / substeps;
   Vec<T, Model::kStateDim> x = x0;
-  for (int i = 0; i < substeps; ++i) x = FixedStep<Model, T>(scheme, x, t0 + i * h, h, u, p);
+  for (int i = 0; i < substeps; ++i) x = FixedStep<Model, T, Prm>(scheme, x, t0 + i * h, h, u, p);
   return x;
 }
 

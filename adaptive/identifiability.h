@@ -1,0 +1,47 @@
+// Standard errors, correlations and identifiability from the observed Fisher
+// information H (the Hessian of the NLL at the optimum, on the tuner's theta
+// scale), in plain types: compiled once, not per model.
+//
+//   H = V diag(lambda) V^T   (ascending lambda)
+//   a direction v_j is flat when lambda_j <= kFlatRatio * max |lambda|
+//   (the data do not determine theta along it); negative curvature there
+//   means the optimiser stopped off a minimum
+//   cov = sum over the other directions of v_j v_j^T / lambda_j
+//   SE_i = sqrt(cov_ii), +inf when theta_i has a component in a flat direction
+//
+// A flat direction is described by the parameters it involves. On two log
+// parameters, v = (a, b) leaves p1^b p2^-a determined: v = (1, 1)/sqrt 2 over
+// (log g, log L) is "only g/L is determined", with that combination's value
+// and its SE sqrt(w^T cov w) (finite: w is orthogonal to v).
+//
+// Usage:
+//   FisherReport r = AnalyseFisher(H, theta, names, is_log);
+//   for (const std::string& s : r.sentences) std::cout << s << "\n";
+#ifndef ESTLAB_ADAPTIVE_IDENTIFIABILITY_H_
+#define ESTLAB_ADAPTIVE_IDENTIFIABILITY_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace estlab {
+
+struct FisherReport {
+  std::vector<double> std_errors;   // theta scale, +inf where not identifiable
+  std::vector<double> correlation;  // k x k row-major, NaN where not identifiable
+  std::vector<double> eigenvalues;  // of H, ascending
+  std::vector<std::string> sentences;
+  bool positive_definite = false;   // no flat or negative direction
+};
+
+// Relative eigenvalue below which a direction of H counts as flat.
+inline constexpr double kFlatRatio = 1e-9;
+
+// names: the parameters as in the report ("L", "qc", "r_theta"); is_log:
+// whether theta_i is the log of that parameter.
+FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
+                           const std::vector<std::string>& names, const std::vector<bool>& is_log);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_ADAPTIVE_IDENTIFIABILITY_H_
