@@ -86,7 +86,7 @@ std::string ParamTables(const ModelFile& m) {
   std::string members, specs;
   for (const ParamDecl& p : m.params) {
     const std::string member = MemberName(p.name);
-    members += "    double " + member + " = " + FormatDouble(p.default_value) + ";\n";
+    members += "    S " + member + " = S(" + FormatDouble(p.default_value) + ");\n";
     const std::string description = p.unit.empty() ? p.name : p.name + " [" + p.unit + "]";
     const char* constraint = p.constraint == Constraint::kPositive      ? "kPositive"
                              : p.constraint == Constraint::kNonNegative ? "kNonNegative"
@@ -96,7 +96,10 @@ std::string ParamTables(const ModelFile& m) {
   }
   const std::string table = "  static constexpr std::array<ParamSpec<Params>, " +
                             std::to_string(m.params.size()) + "> kParams = ";
-  return "  struct Params {\n" + members + "  };\n" + table +
+  // Generic over the scalar so that `estlab tune --estimate-param` can
+  // differentiate through the parameters (models/model_params.h).
+  return "  template <class S = double>\n  struct ParamsT {\n" + members +
+         "  };\n  using Params = ParamsT<>;\n" + table +
          (specs.empty() ? "{};\n" : "{{\n" + specs + "  }};\n");
 }
 

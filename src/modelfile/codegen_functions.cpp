@@ -132,10 +132,19 @@ void AddLets(const ModelFile& m, Body* body) {
     let_is_t.push_back(body->IsTExpr(m.lets[i].expr));
   }
   body->SetLetTypes(let_is_t);
+  // A let that uses a parameter (directly or through another let) has the
+  // parameters' scalar, double or T: `auto`.
+  std::vector<bool> let_uses_p(m.lets.size(), false);
+  for (size_t i = 0; i < m.lets.size(); ++i) {
+    ForEachName(m.lets[i].expr, [&](const Expr& n) {
+      if (n.ref == NameRef::kParam || (n.ref == NameRef::kLet && let_uses_p[n.index]))
+        let_uses_p[i] = true;
+    });
+  }
   for (size_t i = 0; i < m.lets.size(); ++i) {
     if (!needed[i]) continue;
-    body->Add(std::string(let_is_t[i] ? "const T " : "const double ") + LocalName(m.lets[i].name) +
-              " = " + body->Code(m.lets[i].expr) + ";");
+    const char* type = let_is_t[i] ? "const T " : let_uses_p[i] ? "const auto " : "const double ";
+    body->Add(type + LocalName(m.lets[i].name) + " = " + body->Code(m.lets[i].expr) + ";");
   }
 }
 
@@ -155,9 +164,8 @@ std::string DynamicsFunction(const ModelFile& m, int indent) {
                           Param(body.uses_t, "const T& ", "t") + ", " +
                           Param(body.uses_x(), "const " + vec + "& ", "x") + ", ";
   if (m.discrete) signature += Param(body.uses_dt, "double ", "dt") + ", ";
-  signature +=
-      Param(body.uses_u, "double ", "u") + ", " + Param(body.uses_p, "const Params& ", "p");
-  return Spaces(indent) + "template <class T>\n" + Spaces(indent) + signature + ") {\n" +
+  signature += Param(body.uses_u, "double ", "u") + ", " + Param(body.uses_p, "const P& ", "p");
+  return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + signature + ") {\n" +
          body.Text(indent + 2) + Spaces(indent) + "}\n";
 }
 
@@ -169,8 +177,8 @@ std::string EvalFunction(const ModelFile& m, const MeasurementDecl& meas, int in
     body.Add("z(" + std::to_string(i) + ") = " + body.TCode(meas.outputs[i].expr) + ";");
   body.Add("return z;");
   const std::string x_type = "const Vec<T, " + std::to_string(m.states.size()) + ">& ";
-  return Spaces(indent) + "template <class T>\n" + Spaces(indent) + "static " + vec + " Eval(" +
-         Param(body.uses_x(), x_type, "x") + ", " + Param(body.uses_p, "const Params& ", "p") +
+  return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + "static " + vec +
+         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " + Param(body.uses_p, "const P& ", "p") +
          ") {\n" + body.Text(indent + 2) + Spaces(indent) + "}\n";
 }
 

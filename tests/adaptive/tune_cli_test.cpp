@@ -222,3 +222,53 @@ TEST_F(TuneCli, EveryStartDivergingExitsOneWithoutIni) {
 }
 
 }  // namespace
+
+namespace {
+
+// --estimate-param end to end: the estimates in the JSON and tuned.ini, which
+// `estlab filter --config` reads (parameters included); bad names exit 2.
+TEST_F(TuneCli, EstimatesParametersAndWritesThemForFilter) {
+  const CmdResult s = Estlab(
+      "simulate --model pendulum --param L=0.5,b=0.3 --x0 theta=1.2 --t-end 10 --dt 0.01 "
+      "--integrator rk4 --process-noise-var 0,1e-3 --measure angle --meas-noise-var 1e-3 "
+      "--seed 3 --out train.csv");
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const std::string filter =
+      "--model pendulum --measure angle --filter ekf --integrator rk4 --x0 theta=1.2 "
+      "--p0-diag 1e-2,1e-2 ";
+  const CmdResult r = Estlab("tune " + filter +
+                             "--data train.csv --param L=0.8,b=0.1 --estimate-param L,b "
+                             "--param-bounds b=0:5 --init-q-white-accel 1e-2 --init-r-diag 1e-2 "
+                             "--out tuned.ini --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  for (const char* key : {"\"params\": {\"L\": ", "\"std_errors\": {\"L\": ",
+                          "\"params_initial\": {\"L\": 0.8", "\"identifiability\": []",
+                          "\"correlation\": [1, "}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << "missing " << key << " in\n" << r.out;
+  }
+  const std::string ini = Slurp(File("tuned.ini"));
+  ASSERT_NE(ini.find("param = L="), std::string::npos) << ini;
+  ASSERT_NE(ini.find("param = b="), std::string::npos) << ini;
+  const double L = std::stod(ini.substr(ini.find("param = L=") + 10));
+  EXPECT_NEAR(L, 0.5, 0.03);
+  const CmdResult f =
+      Estlab("filter " + filter + "--data train.csv --config tuned.ini --out est.csv --json");
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  // The filter with the estimated L, b and noise: NIS near 1.
+  const size_t at = f.out.find("\"mean_nis\": ");
+  ASSERT_NE(at, std::string::npos) << f.out;
+  EXPECT_NEAR(std::stod(f.out.substr(at + 12)), 1.0, 0.15) << f.out;
+
+  for (const std::string& bad :
+       {std::string("--estimate-param len"), std::string("--estimate-param L --param-bounds b=0:1"),
+        std::string("--estimate-param L --param-prior L=normal:1:-1")}) {
+    const CmdResult e = Estlab("tune " + filter +
+                               "--data train.csv --init-q-white-accel 1e-2 --init-r-diag 1e-2 " +
+                               bad + " --out bad.ini");
+    EXPECT_EQ(e.exit_code, 2) << bad << "\n" << e.err;
+    EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;
+    EXPECT_FALSE(Exists("bad.ini")) << bad;
+  }
+}
+
+}  // namespace

@@ -91,13 +91,13 @@ TEST(Codegen, HeaderHasTheBuiltInForm) {
       "static constexpr std::array<const char*, 2> kStateUnits = {\"m\", \"m/s\"};",
       "static constexpr std::array<bool, 2> kAngleStates = {false, false};",
       "static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};",
-      "    double k = 2.0;\n    double int_ = 0.5;\n",
+      "    S k = S(2.0);\n    S int_ = S(0.5);\n",
       "{\"k\", &Params::k, \"k [1/s]\", Constraint::kPositive},",
       "{\"int\", &Params::int_, \"int\", Constraint::kAny},",
-      "static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double u, const Params& p) {",
+      "static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double u, const P& p) {",
       "    using std::atan2;\n    using std::pow;\n    using std::sin;\n"
       "    const T& x_ = x(0);\n    const T& v = x(1);\n"
-      "    const double a11 = p.k + p.int_;\n    const T s = sin(x_);\n",
+      "    const auto a11 = p.k + p.int_;\n    const T s = sin(x_);\n",
       "dx(0) = v;",
       "dx(1) = -p.k * (x_ * x_) + model_fn::Square(x_ + 1.0) - pow(v, 2.5) + "
       "model_fn::PowT(T(p.k), v) + model_fn::Asin(s) + atan2(v, T(1.0)) + model_fn::Min(v, "
@@ -110,7 +110,7 @@ TEST(Codegen, HeaderHasTheBuiltInForm) {
       "struct XTheta {",
       "struct XThetaMeasurement {\n    static constexpr const char* kName = \"x_theta\";",
       "static constexpr std::array<bool, 1> kAngleOutputs = {true};",
-      "static Vec<T, 1> Eval(const Vec<T, 2>& /*x*/, const Params& p) {",
+      "static Vec<T, 1> Eval(const Vec<T, 2>& /*x*/, const P& p) {",
       "z(0) = T(p.k);",
       "struct ParamsMeasurement {",
       "z(0) = -(-v);",
@@ -124,9 +124,9 @@ TEST(Codegen, HeaderHasTheBuiltInForm) {
 
 TEST(Codegen, PendulumRhsIsTheBuiltInsExpression) {
   const std::string h = HeaderOfExample("pendulum.model", "PendulumFile");
-  EXPECT_NE(h.find("  template <class T>\n"
+  EXPECT_NE(h.find("  template <class T, class P>\n"
                    "  static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double /*u*/, "
-                   "const Params& p) {\n"
+                   "const P& p) {\n"
                    "    using std::sin;\n"
                    "    const T& theta = x(0);\n"
                    "    const T& omega = x(1);\n"
@@ -144,7 +144,7 @@ TEST(Codegen, StepModelsHaveStepAndNoRhs) {
   const std::string h = HeaderOfExample("linear_cv.model", "LinearCv");
   EXPECT_NE(h.find("static constexpr bool kDiscreteTime = true;"), std::string::npos);
   EXPECT_NE(h.find("static Vec<T, 2> Step(const T& /*t*/, const Vec<T, 2>& x, double dt, "
-                   "double /*u*/, const Params& /*p*/) {"),
+                   "double /*u*/, const P& /*p*/) {"),
             std::string::npos)
       << h;
   EXPECT_NE(h.find("next(0) = pos + dt * vel;"), std::string::npos);
@@ -158,7 +158,7 @@ TEST(Codegen, StepModelsHaveStepAndNoRhs) {
 TEST(Codegen, MultiarmPairsAndTypeNames) {
   const std::string h = HeaderOfExample("multiarm_double_pendulum.model", "MultiarmDouble");
   EXPECT_NE(h.find("kPositionRatePairs = {{{0, 2}, {1, 3}}};"), std::string::npos);
-  EXPECT_NE(h.find("const double M11 = "), std::string::npos);  // depends on params only
+  EXPECT_NE(h.find("const auto M11 = "), std::string::npos);  // params only: their scalar
   EXPECT_NE(h.find("const T M12 = coupling * cos(phi1 - phi2);"), std::string::npos);
   const ModelFile m = ParseModelFile(ReadFile(kSourceDir + "/examples/models/linear_cv.model"), "");
   EXPECT_EQ(DefaultTypeName(m), "LinearCv");
@@ -238,6 +238,7 @@ const char* const kInstantiateAll = R"(
 #include <tuple>
 
 #include "models/model.h"
+#include "models/model_params.h"
 #include "src/ode/nested_jet.h"
 #include "pendulum.model.h"
 #include "double_pendulum.model.h"
@@ -247,9 +248,8 @@ const char* const kInstantiateAll = R"(
 
 namespace um = estlab::user_models;
 
-template <class M, class T>
-void Instantiate() {
-  const typename M::Params p;
+template <class M, class T, class P>
+void InstantiateWith(const P& p) {
   const estlab::Vec<T, M::kStateDim> x = estlab::Vec<T, M::kStateDim>::Constant(T(0.25));
   if constexpr (M::kDiscreteTime) {
     const estlab::Vec<T, M::kStateDim> y = M::template Step<T>(T(0.0), x, 0.01, 0.0, p);
@@ -260,6 +260,18 @@ void Instantiate() {
   }
   std::apply([&](auto... meas) { ((void)decltype(meas)::template Eval<T>(x, p), ...); },
              typename M::Measurements{});
+}
+
+// With double parameters, and with parameters of the state's scalar (as
+// `estlab tune --estimate-param` runs them).
+template <class M, class T>
+void Instantiate() {
+  InstantiateWith<M, T>(typename M::Params{});
+  if constexpr (estlab::EstimableParams<M>) {
+    std::array<T, M::kParams.size()> v;
+    v.fill(T(0.5));
+    InstantiateWith<M, T>(estlab::MakeParams<M, T>(v));
+  }
 }
 
 template <class M>
@@ -276,6 +288,9 @@ static_assert(estlab::DynamicModel<um::DoublePendulumFile>);
 static_assert(estlab::DynamicModel<um::MultiarmSinglePendulum>);
 static_assert(estlab::DynamicModel<um::MultiarmDoublePendulum>);
 static_assert(estlab::kAllMeasurementsOf<um::PendulumFile>);
+static_assert(estlab::EstimableParams<um::PendulumFile>);
+static_assert(estlab::EstimableParams<um::MultiarmSinglePendulum>);
+static_assert(estlab::EstimableParams<um::MultiarmDoublePendulum>);
 static_assert(estlab::kAllMeasurementsOf<um::MultiarmDoublePendulum>);
 static_assert(um::LinearCv::kDiscreteTime && estlab::DynamicModel<um::LinearCv>);
 static_assert(estlab::kDiscreteTime<um::LinearCv> && !estlab::kDiscreteTime<um::PendulumFile>);
