@@ -64,6 +64,7 @@
 
 #include "adaptive/likelihood_setup.h"
 #include "adaptive/physical_params.h"
+#include "src/run/first_sample.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
 #include "models/model_traits.h"
@@ -359,7 +360,7 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
     if constexpr (std::is_same_v<P, Params>) {
       if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(p, cvodes_options_);
     }
-    b.x = x0_.template cast<T>();
+    b.x = (spec_.x0_first_sample ? PriorMean<Model, Meas>(spec_, d) : x0_).template cast<T>();
     b.P = p0_.template cast<T>();
     b.have_propagated = false;
     long update_index = 0;

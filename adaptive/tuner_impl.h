@@ -10,11 +10,15 @@
 // with step Objective::kCentralStep, since CVODES is not run on Jets).
 // The L-BFGS form (ceres::GradientProblemSolver) gets the exact
 // gradient of the NLL by forward-mode AD: the recursion runs on
-// ceres::Jet<double, C> with C = 2 (K <= 2) or 8 directions per pass; more
-// than 8 parameters are done in ceil(K / 8) passes (chunking, as
+// ceres::Jet<double, C> with C = 2 (K <= 2) or 4 directions per pass; more
+// than 4 parameters are done in ceil(K / 4) passes (chunking, as
 // ceres::DynamicAutoDiffCostFunction does), so only two Jet sizes are
-// instantiated per model and measurement (compile time on 2 cores). The EKF's Jacobians of the
-// fixed-step map need second derivatives for that and use NestedJet (src/ode/nested_jet.h).
+// instantiated per model and measurement (compile time on 2 cores). C = 4
+// rather than 8: the single-pendulum joint fit (K = 4, EKF) took 5.3 s with
+// one Jet<8> pass and 1.3 s with one Jet<4> pass (the nested Jets of the EKF
+// grow with C times the state dimension). The EKF's Jacobians of the
+// fixed-step map need second derivatives for that and use NestedJet
+// (src/ode/nested_jet.h).
 //
 // The least-squares form (Levenberg-Marquardt, ceres::Solver with bounds)
 // minimises 1/2 sum r^2 over the residuals
@@ -86,7 +90,7 @@ class Objective {
     if (k_ <= 2) {
       ok = ChunkedGradient<2>(theta, nll, gradient);
     } else {
-      ok = ChunkedGradient<8>(theta, nll, gradient);
+      ok = ChunkedGradient<4>(theta, nll, gradient);
     }
     if (!ok) return false;
     for (int i = 0; i < k_; ++i)
@@ -105,7 +109,7 @@ class Objective {
     if (jacobian == nullptr || k_ == 0) return ResidualsT<double>(theta, c, residuals);
     if (lik_.UsesCvodes()) return CentralDifferenceResiduals(theta, c, residuals, jacobian);
     if (k_ <= 2) return ChunkedResiduals<2>(theta, c, residuals, jacobian);
-    return ChunkedResiduals<8>(theta, c, residuals, jacobian);
+    return ChunkedResiduals<4>(theta, c, residuals, jacobian);
   }
 
   // min_k log det S_k at theta (for the constant c), false if the filter fails.

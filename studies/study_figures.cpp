@@ -13,6 +13,7 @@
 #include "src/io/csv_reader.h"
 #include "src/io/output_file.h"
 #include "src/registry/registry.h"
+#include "studies/gnuplot_figure.h"
 #include "studies/study_config.h"
 #include "studies/study_results.h"
 
@@ -26,28 +27,6 @@ constexpr const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
                                    "#9467bd", "#8c564b", "#e377c2", "#17becf"};
 
 std::string Color(size_t i) { return kColors[i % (sizeof kColors / sizeof kColors[0])]; }
-
-// Runs a shell command, returns its exit status and output.
-int RunCommand(const std::string& command, std::string* output) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return -1;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) *output += buf;
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
 
 std::string DatValue(const std::string& s) { return s.empty() ? "NaN" : s; }
 
@@ -68,39 +47,7 @@ std::string Label(const std::string& model, const std::string& what) {
   return u.empty() ? what : what + " [" + u + "]";
 }
 
-class Figure {
- public:
-  Figure(std::string folder, std::string name)
-      : folder_(std::move(folder)), name_(std::move(name)) {}
-  std::ostringstream& dat() { return dat_; }
-  std::ostringstream& body() { return body_; }
-  std::string dat_name() const { return name_ + ".dat"; }
-
-  // Writes NAME.dat and NAME.gp (drawing both NAME.png and NAME.svg).
-  std::string Write(const std::string& png_terminal, int width, int height) const {
-    WriteTextFile(folder_ + "/" + name_ + ".dat", dat_.str());
-    std::ostringstream gp;
-    gp << "# estlab figure; redraw with: gnuplot " << name_ << ".gp (in this folder)\n"
-       << "# data: " << name_ << ".dat\n"
-       << "do for [fmt in \"png svg\"] {\n"
-       << "  if (fmt eq \"png\") {\n"
-       << "    set terminal " << png_terminal << " noenhanced size " << width << "," << height
-       << "\n  } else {\n"
-       << "    set terminal svg noenhanced size " << width << "," << height << " dynamic\n"
-       << "  }\n"
-       << "  set output '" << name_ << ".'.fmt\n"
-       << "  reset\n"
-       << "  set grid\n"
-       << "  set key outside right top\n"
-       << body_.str() << "  set output\n}\n";
-    WriteTextFile(folder_ + "/" + name_ + ".gp", gp.str());
-    return folder_ + "/" + name_ + ".gp";
-  }
-
- private:
-  std::string folder_, name_;
-  std::ostringstream dat_, body_;
-};
+using Figure = GnuplotFigure;
 
 struct ComboName {
   std::string filter, noise;
@@ -136,14 +83,14 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
   }
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
+    << GnuplotQuote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
              (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
     << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
     const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
-    b << "  set ylabel " << Quote(Label(sc.model->name, states[i])) << "\n"
+    b << "  set ylabel " << GnuplotQuote(Label(sc.model->name, states[i])) << "\n"
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
-      << Quote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
+      << GnuplotQuote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd', \\\n"
       << (sc.has_truth ? "       '' using 1:" + std::to_string(c0) +
                              " with lines lw 2 lc rgb 'black' title 'truth', \\\n"
@@ -161,12 +108,12 @@ void StatePanels(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
   const auto& states = sc.model->states;
   auto& b = fig->body();
   for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << Quote(Label(sc.model->name, what + states[i])) << "\n"
+    b << "  set ylabel " << GnuplotQuote(Label(sc.model->name, what + states[i])) << "\n"
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
     for (size_t j = 0; j < blocks.size(); ++j)
-      b << (j ? ", \\\n       " : "") << Quote(fig->dat_name()) << " index " << j
+      b << (j ? ", \\\n       " : "") << GnuplotQuote(fig->dat_name()) << " index " << j
         << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
+        << GnuplotQuote(combos[blocks[j]].label());
     b << "\n";
   }
 }
@@ -178,7 +125,7 @@ void RmseTimeFigure(const ScenarioConfig& sc, const std::vector<ComboName>& comb
   Figure& rmse = *fig;
   auto& b = rmse.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
+    << GnuplotQuote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
   StatePanels(sc, combos, blocks, "RMSE ", &rmse);
   b << "  unset multiplot\n";
   scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
@@ -191,18 +138,18 @@ void ConsistencyFigure(const ScenarioConfig& sc, const std::vector<ComboName>& c
   Figure& cons = *fig;
   auto& c = cons.body();
   c << "  set multiplot layout " << (sc.has_truth ? 2 : 1) << ",1 title "
-    << Quote(sc.name + (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
+    << GnuplotQuote(sc.name + (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
              " across runs, 95 % bounds dashed")
     << "\n"
     << "  set logscale y\n";
   for (int panel = sc.has_truth ? 0 : 1; panel < 2; ++panel) {
     const int col = panel == 0 ? 2 : 5;
-    c << "  set ylabel " << Quote(panel == 0 ? "NEES" : "NIS") << "\n"
+    c << "  set ylabel " << GnuplotQuote(panel == 0 ? "NEES" : "NIS") << "\n"
       << (panel == 1 ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
     for (size_t j = 0; j < blocks.size(); ++j)
-      c << (j ? ", \\\n       " : "") << Quote(cons.dat_name()) << " index " << j
+      c << (j ? ", \\\n       " : "") << GnuplotQuote(cons.dat_name()) << " index " << j
         << " using 1:" << col << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << Quote(combos[blocks[j]].label());
+        << GnuplotQuote(combos[blocks[j]].label());
     c << ", \\\n       '' index 0 using 1:" << col + 1
       << " with lines dt 2 lc rgb 'gray30' title '95 % bounds', \\\n       '' index 0 using 1:"
       << col + 2 << " with lines dt 2 lc rgb 'gray30' notitle\n";
@@ -291,14 +238,14 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
   b << "  set multiplot layout " << panels.size() << ",1 title "
-    << Quote(sc.name + ": " + what + ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
+    << GnuplotQuote(sc.name + ": " + what + ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
     << "  set lmargin " << longest + 3 << "\n  unset key\n"
     << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
     << "  set cbrange [0:2]\n  unset colorbox\n";
   for (size_t i = 0; i < panels.size(); ++i)
-    b << "  set xlabel " << Quote(panels[i].label) << "\n  plot " << Quote(fig.dat_name())
+    b << "  set xlabel " << GnuplotQuote(panels[i].label) << "\n  plot " << GnuplotQuote(fig.dat_name())
       << " index " << i << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
   const int panel = 22 * int(combos.size()) + 90;
@@ -360,7 +307,7 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
   if (blocks.empty()) return;
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << Quote(sc.name + ", run " + std::to_string(run) +
+    << GnuplotQuote(sc.name + ", run " + std::to_string(run) +
              ": filter standard deviation sqrt(P) over time (log scale)")
     << "\n  set logscale y\n";
   StatePanels(sc, combos, blocks, "sd ", &fig);
@@ -405,17 +352,17 @@ void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::strin
     }
     auto& b = fig.body();
     b << "  set multiplot layout " << (states.size() + 1) / 2 << ",2 title "
-      << Quote(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
+      << GnuplotQuote(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
       << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n  set logscale y\n"
-      << "  set xlabel " << Quote(key + " (scenario label)")
+      << "  set xlabel " << GnuplotQuote(key + " (scenario label)")
       << "\n  set xtics rotate by -40\n  set key inside top left\n";
     for (size_t i = 0; i < states.size(); ++i) {
-      b << "  set ylabel " << Quote(Label(first.model->name, "RMSE " + states[i])) << "\n  plot ";
+      b << "  set ylabel " << GnuplotQuote(Label(first.model->name, "RMSE " + states[i])) << "\n  plot ";
       for (size_t j = 0; j < combos.size(); ++j) {
         const size_t index = i * combos.size() + j;
-        b << (j ? ", \\\n       " : "") << Quote(fig.dat_name()) << " index " << index
+        b << (j ? ", \\\n       " : "") << GnuplotQuote(fig.dat_name()) << " index " << index
           << " using 1:3:4:5:xticlabels(2) with yerrorlines pt 7 ps 0.8 lw 1.5 lc rgb '" << Color(j)
-          << "' title " << Quote(combos[j].label());
+          << "' title " << GnuplotQuote(combos[j].label());
       }
       b << "\n";
     }
@@ -442,12 +389,8 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
   fs::create_directories(out.folder);
   std::string term = "pngcairo";
   if (options.render) {
-    std::string terminals;
-    if (RunCommand(options.gnuplot + " -e 'set terminal'", &terminals) != 0) {
-      out.message = "gnuplot ('" + options.gnuplot + "') did not run; the scripts are written";
-    } else if (terminals.find("pngcairo") == std::string::npos) {
-      term = "png";
-    }
+    term = PngTerminal(options.gnuplot, &out.message);
+    if (term.empty()) term = "pngcairo";
   }
   out.terminal = term;
 
@@ -475,16 +418,8 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
   SweepFigures(config, summary, out.folder, term, &out.scripts);
 
   if (options.render && out.message.empty()) {
-    for (const auto& script : out.scripts) {
-      std::string log;
-      const std::string name = fs::path(script).filename().string();
-      const int status = RunCommand(
-          "cd " + ShellQuote(out.folder) + " && " + options.gnuplot + " " + ShellQuote(name), &log);
-      if (status != 0) {
-        out.message = "gnuplot failed on " + script + ": " + log;
-        return out;
-      }
-    }
+    for (const auto& script : out.scripts)
+      if (!RenderFigure(script, options.gnuplot, &out.message)) return out;
     out.rendered = true;
   }
   return out;

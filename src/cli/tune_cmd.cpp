@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "src/cli/commands.h"
+#include "src/cli/tune_profile.h"
+#include "src/cli/tune_validate.h"
 #include "src/core/parse.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
@@ -42,10 +44,18 @@ constexpr const char* kExamples = R"(Examples:
       --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
       --init-r-scalar 0.01 --starts 4 --burn-in 20 --form least-squares --json
   # Estimate the length and damping with Q and R (prediction-error ML), the
-  # damping kept in [0, 5], and write them for 'estlab filter --config':
+  # damping kept in [0, 5], its profile likelihood drawn (profile_L.png), and
+  # write them for 'estlab filter --config':
   estlab tune --model pendulum --measure angle --filter ekf --integrator rk4 --data train.csv \
       --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --param L=0.8,b=0.1 --estimate-param L,b \
-      --param-bounds b=0:5 --init-q-white-accel 1e-3 --init-r-diag 1e-3 --out tuned.ini
+      --param-bounds b=0:5 --init-q-white-accel 1e-3 --init-r-diag 1e-3 --profile L \
+      --out tuned.ini
+  # Real recordings: several pieces, each from its own first sample, angles
+  # from upright shifted to estlab's pendulum, two held-out pieces:
+  estlab tune --model pendulum --measure angle --filter ekf --integrator rk4 \
+      --data train_1.csv --data train_2.csv --column z_theta=theta-pi --x0 first-sample \
+      --p0-diag 0.01,100 --burn-in 50 --param L=0.15,b=0.05 --estimate-param L,b \
+      --init-q-white-accel 1 --init-r-diag 1e-6 --validate validate_1.csv --validate validate_2.csv
 
 Physical parameters (--estimate-param): the named model parameters join
 Q and R in theta, from their --param values: log p for a parameter that must
@@ -84,34 +94,17 @@ Ceres' termination, and the standard error of every log parameter from the
 curvature of the NLL; a parameter with SE > 1 is 'poorly identified by this
 data'. --out writes the tuned noise as 'q-diag = ...' / 'q = ...' /
 'q-white-accel = ...' and 'r-diag = ...' / 'r = ...' lines, the option names of
-'estlab filter'. --validate runs the filter on another file with the initial,
+'estlab filter', and 'param = NAME=VALUE' for every estimated parameter.
+--validate (repeatable) runs the filter on held-out files with the initial,
 the tuned and (from <file>.json written by 'estlab simulate', or
---true-q-diag/--true-r-diag) the true noise. Exit status 1, and no --out file,
-when the filter diverges at every start.
+--true-q-diag/--true-r-diag) the true noise, and reports per file the NLL per
+step, the mean NIS with its 95 % bounds and the one-step-ahead prediction
+RMSE of every output (after --burn-in), and RMSE and NEES against truth
+columns when the file has them. --x0 first-sample gives every --data and
+--validate file its own prior mean: its first measured value of each state
+an output of the same name measures (the others 0). Exit status 1, and no
+--out file, when the filter diverges at every start.
 )";
-
-// The numbers of "key": [a, b, ...] in a JSON text (null -> NaN); false when
-// the key is absent.
-bool JsonNumberArray(const std::string& text, const std::string& key, std::vector<double>* out) {
-  const size_t at = text.find("\"" + key + "\"");
-  if (at == std::string::npos) return false;
-  size_t i = text.find(':', at);
-  if (i == std::string::npos) return false;
-  i = text.find_first_not_of(" \t\r\n", i + 1);
-  if (i == std::string::npos || text[i] != '[') return false;
-  const size_t end = text.find(']', i);
-  if (end == std::string::npos) return false;
-  out->clear();
-  std::stringstream items(text.substr(i + 1, end - i - 1));
-  std::string item;
-  while (std::getline(items, item, ',')) {
-    const size_t b = item.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) continue;
-    const std::string v = item.substr(b, item.find_last_not_of(" \t\r\n") - b + 1);
-    out->push_back(v == "null" ? std::nan("") : ParseNumber(v, key));
-  }
-  return true;
-}
 
 // --init-q-scalar s -> init-q-diag "s,s,..." in the settings (the user's own
 // text repeated, so BuildFilterSpec reads exactly what was written).
@@ -201,81 +194,6 @@ void WriteTuned(JsonWriter* j, NoiseParam param, bool white_accel, double qc,
   j->EndObject();
 }
 
-void WriteSummary(JsonWriter* j, const FilterSummary& s) {
-  j->BeginObject().Key("status").Value(s.status);
-  if (!s.ok) j->Key("message").Value(s.message);
-  j->Key("updates").Value(s.updates);
-  j->Key("nll_per_step").Value(s.updates ? -s.loglik / double(s.updates) : std::nan(""));
-  j->Key("mean_nis").Value(s.mean_nis);
-  j->Key("nis_bounds95").Value(std::vector<double>{s.nis_bounds95[0], s.nis_bounds95[1]});
-  if (!s.rmse.empty()) {
-    j->Key("rmse").BeginObject();
-    for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);
-    j->EndObject();
-    j->Key("mean_nees").Value(s.mean_nees);
-    j->Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});
-  }
-  j->EndObject();
-}
-
-struct Validation {
-  std::string path;
-  FilterSummary initial, tuned;
-  std::optional<FilterSummary> oracle;
-  std::string oracle_source;
-};
-
-Validation Validate(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& spec,
-                    const TuneResult& result) {
-  Validation v;
-  v.path = vm["validate"].as<std::string>();
-  if (model.run_filter == nullptr)
-    throw InputError("--validate: the filter runner of model '" + model.name +
-                     "' is not available");
-  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const FilterData data = LoadFilterData(v.path, model, meas, ParseColumnRenames(vm));
-  CheckPriorTime(spec, data);
-  v.initial = model.run_filter(spec, data).summary;
-  v.tuned = model.run_filter(result.tuned_spec, data).summary;
-
-  // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar.
-  const int n = int(model.states.size()), m = int(meas.outputs.size());
-  std::vector<double> q_diag, r_diag;
-  std::string source;
-  std::ifstream sidecar(v.path + ".json");
-  if (sidecar) {
-    std::stringstream text;
-    text << sidecar.rdbuf();
-    const bool has_q = JsonNumberArray(text.str(), "process_noise_var", &q_diag);
-    const bool has_r = JsonNumberArray(text.str(), "meas_noise_var", &r_diag);
-    if (has_q && q_diag.empty()) q_diag.assign(n, 0.0);  // simulated without process noise
-    if (has_q || has_r) source = v.path + ".json";
-  }
-  if (vm.count("true-q-diag")) {
-    q_diag = ParseList(vm["true-q-diag"].as<std::string>(), "--true-q-diag");
-    RequireLength(q_diag, n, "--true-q-diag", "one per state");
-    source = "--true-q-diag/--true-r-diag";
-  }
-  if (vm.count("true-r-diag")) {
-    r_diag = ParseList(vm["true-r-diag"].as<std::string>(), "--true-r-diag");
-    RequireLength(r_diag, m, "--true-r-diag", "one per output");
-    source = "--true-q-diag/--true-r-diag";
-  }
-  if (q_diag.size() == size_t(n) && r_diag.size() == size_t(m)) {
-    RequireNonNegative(q_diag, "true process noise");
-    RequireNonNegative(r_diag, "true measurement noise");
-    FilterSpec oracle = spec;
-    oracle.q_white_accel = false;
-    oracle.q.assign(n * n, 0.0);
-    for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
-    oracle.r.assign(m * m, 0.0);
-    for (int i = 0; i < m; ++i) oracle.r[i * m + i] = r_diag[i];
-    v.oracle = model.run_filter(oracle, data).summary;
-    v.oracle_source = source;
-  }
-  return v;
-}
-
 // The estimated physical parameters, on their natural scale, and what the
 // observed Fisher information says about them.
 void PrintPhysical(const TuneResult& r) {
@@ -293,7 +211,7 @@ void PrintPhysical(const TuneResult& r) {
 }
 
 void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
-                const std::optional<Validation>& validation, const std::string& out_path) {
+                const std::vector<Validation>& validations, const std::string& out_path) {
   const int n = int(model.states.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   std::cout << std::setprecision(6);
@@ -335,29 +253,17 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
     std::cout << "\n";
   }
   std::cout << "wall time     " << r.wall_s << " s\n";
-  if (validation) {
-    std::cout << "\nvalidation on " << validation->path
-              << "\n  noise      NLL/step    mean NIS (95% bounds)          mean NEES   RMSE\n";
-    auto row = [&](const char* name, const FilterSummary& s) {
-      std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
-                << (s.updates ? -s.loglik / double(s.updates) : std::nan("")) << "  "
-                << std::setw(9) << s.mean_nis << " (" << s.nis_bounds95[0] << " .. "
-                << s.nis_bounds95[1] << ")  ";
-      if (!s.rmse.empty()) {
-        std::cout << std::setw(9) << s.mean_nees << "  ";
-        for (size_t i = 0; i < s.rmse.size(); ++i) std::cout << (i ? ", " : "") << s.rmse[i];
-      }
-      std::cout << (s.ok ? "" : "  (" + s.status + ")") << "\n";
-    };
-    row("initial", validation->initial);
-    row("tuned", validation->tuned);
-    if (validation->oracle) row("true", *validation->oracle);
-  }
+  const std::vector<std::string>& outputs = model.FindMeasurement(spec.measurement).outputs;
+  for (const Validation& v : validations) PrintValidation(v, outputs);
   if (!out_path.empty()) std::cout << "wrote         " << out_path << "\n";
 }
 
+void WriteProfileJson(JsonWriter* j, const ProfileResult& p, const std::vector<std::string>& files);
+
 std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r,
-                       const std::optional<Validation>& validation, const std::string& out_path) {
+                       const std::vector<Validation>& validations, const std::string& out_path,
+                       const std::optional<ProfileResult>& profile,
+                       const std::vector<std::string>& profile_files) {
   const int n = int(model.states.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   JsonWriter j;
@@ -412,24 +318,45 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     j.Key("ok").Value(s.ok).Key("termination").Value(s.termination).EndObject();
   }
   j.EndArray();
-  if (validation) {
-    j.Key("validation").BeginObject().Key("data").Value(validation->path);
-    j.Key("initial");
-    WriteSummary(&j, validation->initial);
-    j.Key("tuned");
-    WriteSummary(&j, validation->tuned);
-    j.Key("oracle");
-    if (validation->oracle) {
-      WriteSummary(&j, *validation->oracle);
-      j.Key("oracle_source").Value(validation->oracle_source);
-    } else {
-      j.Null();
-    }
-    j.EndObject();
+  if (!validations.empty()) {
+    j.Key("validation").BeginArray();
+    for (const Validation& v : validations)
+      WriteValidationJson(&j, v, model.FindMeasurement(spec.measurement).outputs);
+    j.EndArray();
   }
   if (!out_path.empty()) j.Key("out").Value(out_path);
+  if (profile) {
+    j.Key("profile");
+    WriteProfileJson(&j, *profile, profile_files);
+  }
   j.EndObject();
   return j.str();
+}
+
+void WriteProfileJson(JsonWriter* j, const ProfileResult& p, const std::vector<std::string>& files) {
+  j->BeginObject().Key("name").Value(p.name).Key("values").Value(p.values);
+  j->Key("nll").Value(p.nll).Key("status").Value(p.status);
+  j->Key("ci95").Value(std::vector<double>{p.ci_lo, p.ci_hi}).Key("files").Value(files);
+  j->EndObject();
+}
+
+void PrintProfile(const ProfileResult& p, const std::vector<std::string>& files,
+                  const std::string& message) {
+  std::cout << "\nprofile likelihood of " << p.name << " (others re-optimised)\n"
+            << "  " << std::setw(12) << p.name << "   NLL - NLL(optimum)\n";
+  for (size_t i = 0; i < p.values.size(); ++i) {
+    std::cout << "  " << std::setw(12) << p.values[i] << "   " << std::setw(12)
+              << p.nll[i] - p.nll_optimum << (p.status[i] == "converged" ? "" : "  " + p.status[i])
+              << "\n";
+  }
+  auto end = [](double v) { return std::isnan(v) ? std::string("open") : FormatNumber(v); };
+  std::cout << "  95 % likelihood-ratio interval: " << end(p.ci_lo) << " .. " << end(p.ci_hi)
+            << (std::isnan(p.ci_lo) || std::isnan(p.ci_hi)
+                    ? " (open: the profile stays below 1.92 to that end of the grid)"
+                    : "")
+            << "\n";
+  for (const std::string& f : files) std::cout << "wrote         " << f << "\n";
+  if (!message.empty()) std::cout << "  " << message << "\n";
 }
 
 std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
@@ -468,7 +395,12 @@ int RunTune(const std::vector<std::string>& args) {
       "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
-      "validate", po::value<std::string>(), "validation data CSV")(
+      "profile", po::value<std::string>(),
+      "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21)")(
+      "profile-out", po::value<std::string>(),
+      "prefix of the profile's CSV and figure (default profile_NAME)")(
+      "validate", po::value<std::vector<std::string>>()->composing(),
+      "validation data CSV (repeatable)")(
       "true-q-diag", po::value<std::string>(),
       "validation: true Q diagonal (else <validate>.json)")(
       "true-r-diag", po::value<std::string>(),
@@ -491,6 +423,17 @@ int RunTune(const std::vector<std::string>& args) {
   if (vm.count("out"))
     RefuseOutputOverInput("--out", vm["out"].as<std::string>(),
                           InputFiles(vm, {"data", "validate", "config"}));
+  std::optional<ProfileRequest> profile_request;
+  std::string profile_prefix;
+  if (vm.count("profile")) {
+    profile_request = ParseProfileRequest(vm["profile"].as<std::string>());
+    profile_prefix = vm.count("profile-out") ? vm["profile-out"].as<std::string>()
+                                             : "profile_" + profile_request->name;
+    RefuseOutputOverInput("--profile-out", profile_prefix + ".csv",
+                          InputFiles(vm, {"data", "validate", "config"}));
+  } else if (vm.count("profile-out")) {
+    throw InputError("--profile-out needs --profile");
+  }
   const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = true});
   if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
@@ -539,10 +482,23 @@ int RunTune(const std::vector<std::string>& args) {
   std::optional<OutputFile> out;
   if (!out_path.empty()) out.emplace(out_path);
 
+  if (profile_request) {
+    bool named = false;
+    for (const EstimatedParam& e : options.estimate) named = named || e.name == profile_request->name;
+    if (!named)
+      throw InputError("--profile: '" + profile_request->name + "' is not in --estimate-param");
+  }
   const TuneResult result = model.tune(spec, options, datasets);
-  std::optional<Validation> validation;
+  std::optional<ProfileResult> profile;
+  std::vector<std::string> profile_files;
+  std::string profile_message;
+  if (result.IsSolutionUsable() && profile_request) {
+    profile = ProfileLikelihood(model, options, datasets, result, *profile_request);
+    profile_files = WriteProfile(*profile, profile_prefix, &profile_message);
+  }
+  std::vector<Validation> validations;
   if (result.IsSolutionUsable() && vm.count("validate"))
-    validation = Validate(vm, model, spec, result);
+    validations = ValidateAll(vm, model, spec, result, options.burn_in);
   if (result.IsSolutionUsable() && out) {
     out->stream() << "# estlab tune: model " << model.name << ", measurement " << spec.measurement
                   << ", filter " << FilterKindName(spec.kind()) << ", NLL "
@@ -556,12 +512,13 @@ int RunTune(const std::vector<std::string>& args) {
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << ResultJson(model, spec, result, validation,
-                            result.IsSolutionUsable() ? out_path : "")
+    std::cout << ResultJson(model, spec, result, validations,
+                            result.IsSolutionUsable() ? out_path : "", profile, profile_files)
               << "\n";
   } else {
-    PrintHuman(model, spec, result, datasets.size(), validation,
+    PrintHuman(model, spec, result, datasets.size(), validations,
                result.IsSolutionUsable() ? out_path : "");
+    if (profile) PrintProfile(*profile, profile_files, profile_message);
   }
   if (!result.IsSolutionUsable()) {
     std::cerr << "estlab: error: " << result.message << "\n";

@@ -28,7 +28,10 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"rtol", "1e-8", "CVODES relative tolerance"},
       {"atol", "1e-10", "CVODES absolute tolerance"},
       {"max-steps", "500000", "CVODES maximum steps per interval"},
-      {"x0", nullptr, "prior mean name=value,... (others 0)", K::kRepeatable, false, true},
+      {"x0", nullptr,
+       "prior mean name=value,... (others 0), or first-sample: each data file's first "
+       "measured states",
+       K::kRepeatable, false, true},
       {"p0-diag", nullptr, "prior covariance diagonal (default 1 for every state)", K::kValue, false, true},
       {"p0", nullptr, "prior covariance matrix \"a,b;c,d\"", K::kValue, false, true},
       {"q-diag", nullptr, "process noise Q diagonal (per step)", K::kValue, true, true},
@@ -303,7 +306,22 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
     spec.has_t0 = true;
     spec.t0 = r.Number("t0");
   }
-  spec.x0 = ForKey("x0", [&] { return model.ResolveState(r.Assignments("x0"), "x0"); });
+  const std::vector<std::string> x0_text = settings.GetAll("x0");
+  if (x0_text.size() == 1 && Trim(x0_text[0]) == "first-sample") {
+    spec.x0_first_sample = true;
+    spec.x0.assign(n, 0.0);
+    ForKey("x0", [&] {
+      bool any = false;
+      for (const std::string& o : meas.outputs)
+        for (const std::string& s : model.states) any = any || o == s;
+      if (!any)
+        throw InputError("first-sample: measurement '" + meas.name +
+                         "' has no output named like a state");
+      return 0;
+    });
+  } else {
+    spec.x0 = ForKey("x0", [&] { return model.ResolveState(r.Assignments("x0"), "x0"); });
+  }
   if (r.Given("p0-diag") || r.Given("p0")) {
     spec.p0 = r.DiagOrMatrix("p0-diag", "p0", n, "one per state");
   } else {

@@ -21,6 +21,7 @@
 
 #include "models/model_traits.h"
 #include "src/core/white_accel.h"
+#include "src/run/first_sample.h"
 #include "src/filters/filters.h"
 #include "src/filters/noise_adapter.h"
 #include "src/run/filter_spec.h"
@@ -94,7 +95,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   }
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  filter->Initialize(ToVec<N>(spec.x0), MatFromVector<N, N>(spec.p0));
+  filter->Initialize(PriorMean<Model, Meas>(spec, data), MatFromVector<N, N>(spec.p0));
   std::vector<double> sq_err(N, 0.0), abs_err(N, 0.0);
   double nis_sum = 0.0, nees_sum = 0.0;
   long nees_count = 0;

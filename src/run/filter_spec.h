@@ -26,6 +26,10 @@ struct FilterSpec {
   }
 
   std::vector<double> x0;  // n
+  // `x0 = first-sample`: each dataset's prior mean is its first measured
+  // value of every state that an output of the same name measures, the
+  // others x0's (0) (FirstSampleX0, first_sample.h).
+  bool x0_first_sample = false;
   std::vector<double> p0;  // n x n, row-major
 
   // Process noise: a fixed matrix, or qc times the white-noise-acceleration

@@ -340,8 +340,8 @@ TEST(TunerGradient, JetGradientMatchesCentralDifferences) {
   }
 }
 
-TEST(TunerGradient, ChunkedGradientWithMoreThanEightParameters) {
-  // Two axes, full Q (10) and full R (3): 13 parameters, two Jet<8> passes.
+TEST(TunerGradient, ChunkedGradientWithMoreThanFourParameters) {
+  // Two axes, full Q (10) and full R (3): 13 parameters, four Jet<4> passes.
   const double dt = 0.1;
   Mat<2, 2> R;
   R << 0.3, 0.05, 0.05, 0.2;

@@ -1,0 +1,200 @@
+#include "src/cli/tune_validate.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "src/core/parse.h"
+#include "src/options/filter_flags.h"
+
+namespace estlab::cli {
+namespace {
+
+namespace po = boost::program_options;
+
+// The text between the brackets after "key": ('[' or '{'), or "" when absent.
+std::string JsonBracketed(const std::string& text, const std::string& key, char open) {
+  const size_t at = text.find("\"" + key + "\"");
+  if (at == std::string::npos) return "";
+  size_t i = text.find(':', at);
+  if (i == std::string::npos) return "";
+  i = text.find_first_not_of(" \t\r\n", i + 1);
+  if (i == std::string::npos || text[i] != open) return "";
+  const size_t end = text.find(open == '[' ? ']' : '}', i);
+  return end == std::string::npos ? "" : text.substr(i + 1, end - i - 1);
+}
+
+// The numbers of "key": [a, b, ...] in a JSON text (null -> NaN); false when
+// the key is absent.
+bool JsonNumberArray(const std::string& text, const std::string& key, std::vector<double>* out) {
+  if (text.find("\"" + key + "\"") == std::string::npos) return false;
+  const std::string inner = JsonBracketed(text, key, '[');
+  out->clear();
+  std::stringstream items(inner);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const std::string v = Trim(item);
+    if (v.empty()) continue;
+    out->push_back(v == "null" ? std::nan("") : ParseNumber(v, key));
+  }
+  return true;
+}
+
+// The simulation's parameters ("params": {"g": 9.81, ...}) in the model's
+// order; empty when the sidecar has none or misses one.
+std::vector<double> SidecarParams(const std::string& text, const ModelEntry& model) {
+  const std::string inner = JsonBracketed(text, "params", '{');
+  std::vector<double> out;
+  for (const ParamDesc& p : model.params) {
+    const size_t at = inner.find("\"" + p.name + "\"");
+    if (at == std::string::npos) return {};
+    const size_t colon = inner.find(':', at);
+    const size_t end = inner.find(',', colon);
+    out.push_back(ParseNumber(Trim(inner.substr(colon + 1, end - colon - 1)), "params"));
+  }
+  return out;
+}
+
+ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const FilterData& data,
+                    const std::vector<std::string>& outputs, int burn_in) {
+  const FilterRunOutput out = model.run_filter(spec, data);
+  // The burn-in counts updates, as the tuner's; rows without an update are
+  // few in recorded data, so skip that many rows.
+  return {out.summary, ComputeNoTruthMetrics(out, outputs, burn_in)};
+}
+
+Validation ValidateOne(const po::variables_map& vm, const std::string& path,
+                       const ModelEntry& model, const FilterSpec& spec, const TuneResult& result,
+                       int burn_in) {
+  Validation v;
+  v.path = path;
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm));
+  CheckPriorTime(spec, data);
+  v.initial = RunOn(model, spec, data, meas.outputs, burn_in);
+  v.tuned = RunOn(model, result.tuned_spec, data, meas.outputs, burn_in);
+
+  // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar
+  // (whose parameters are then the true ones too).
+  const int n = int(model.states.size()), m = int(meas.outputs.size());
+  std::vector<double> q_diag, r_diag, params;
+  std::string source;
+  std::ifstream sidecar(path + ".json");
+  if (sidecar) {
+    std::stringstream text;
+    text << sidecar.rdbuf();
+    const bool has_q = JsonNumberArray(text.str(), "process_noise_var", &q_diag);
+    const bool has_r = JsonNumberArray(text.str(), "meas_noise_var", &r_diag);
+    if (has_q && q_diag.empty()) q_diag.assign(n, 0.0);  // simulated without process noise
+    if (has_q || has_r) source = path + ".json";
+    params = SidecarParams(text.str(), model);
+  }
+  if (vm.count("true-q-diag")) {
+    q_diag = ParseList(vm["true-q-diag"].as<std::string>(), "--true-q-diag");
+    RequireLength(q_diag, n, "--true-q-diag", "one per state");
+    source = "--true-q-diag/--true-r-diag";
+  }
+  if (vm.count("true-r-diag")) {
+    r_diag = ParseList(vm["true-r-diag"].as<std::string>(), "--true-r-diag");
+    RequireLength(r_diag, m, "--true-r-diag", "one per output");
+    source = "--true-q-diag/--true-r-diag";
+  }
+  if (q_diag.size() == size_t(n) && r_diag.size() == size_t(m)) {
+    RequireNonNegative(q_diag, "true process noise");
+    RequireNonNegative(r_diag, "true measurement noise");
+    FilterSpec oracle = spec;
+    if (!params.empty()) oracle.params = params;
+    oracle.q_white_accel = false;
+    oracle.q.assign(n * n, 0.0);
+    for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
+    oracle.r.assign(m * m, 0.0);
+    for (int i = 0; i < m; ++i) oracle.r[i * m + i] = r_diag[i];
+    v.oracle = RunOn(model, oracle, data, meas.outputs, burn_in);
+    v.oracle_source = source;
+  }
+  return v;
+}
+
+}  // namespace
+
+std::vector<Validation> ValidateAll(const po::variables_map& vm, const ModelEntry& model,
+                                    const FilterSpec& spec, const TuneResult& result,
+                                    int burn_in) {
+  if (model.run_filter == nullptr)
+    throw InputError("--validate: the filter runner of model '" + model.name +
+                     "' is not available");
+  std::vector<Validation> out;
+  for (const std::string& path : vm["validate"].as<std::vector<std::string>>())
+    out.push_back(ValidateOne(vm, path, model, spec, result, burn_in));
+  return out;
+}
+
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs) {
+  std::cout << "\nvalidation on " << v.path
+            << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
+            << outputs.size() << ")   mean NEES   RMSE\n";
+  auto row = [&](const char* name, const ValidationRun& r) {
+    const NoTruthMetrics& m = r.metrics;
+    std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
+              << m.nll_per_step << "  " << std::setw(9) << m.mean_nis << " ("
+              << m.nis_bounds95[0] << " .. " << m.nis_bounds95[1] << ")  ";
+    for (size_t i = 0; i < m.pred_rmse.size(); ++i)
+      std::cout << (i ? ", " : "") << m.pred_rmse[i];
+    const FilterSummary& s = r.summary;
+    if (!s.rmse.empty()) {
+      std::cout << "  " << std::setw(9) << s.mean_nees << "  ";
+      for (size_t i = 0; i < s.rmse.size(); ++i) std::cout << (i ? ", " : "") << s.rmse[i];
+    }
+    std::cout << (s.ok ? "" : "  (" + s.status + ")") << "\n";
+  };
+  row("initial", v.initial);
+  row("tuned", v.tuned);
+  if (v.oracle) row("true", *v.oracle);
+}
+
+namespace {
+
+void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::string>& outputs) {
+  const FilterSummary& s = r.summary;
+  const NoTruthMetrics& m = r.metrics;
+  j->BeginObject().Key("status").Value(s.status);
+  if (!s.ok) j->Key("message").Value(s.message);
+  j->Key("updates").Value(m.updates);
+  j->Key("nll_per_step").Value(m.nll_per_step);
+  j->Key("mean_nis").Value(m.mean_nis);
+  j->Key("nis_bounds95").Value(std::vector<double>{m.nis_bounds95[0], m.nis_bounds95[1]});
+  j->Key("pred_rmse").BeginObject();
+  for (size_t i = 0; i < outputs.size(); ++i) j->Key(outputs[i]).Value(m.pred_rmse[i]);
+  j->EndObject();
+  if (!s.rmse.empty()) {
+    j->Key("rmse").BeginObject();
+    for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);
+    j->EndObject();
+    j->Key("mean_nees").Value(s.mean_nees);
+    j->Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});
+  }
+  j->EndObject();
+}
+
+}  // namespace
+
+void WriteValidationJson(JsonWriter* j, const Validation& v,
+                         const std::vector<std::string>& outputs) {
+  j->BeginObject().Key("data").Value(v.path);
+  j->Key("initial");
+  WriteRun(j, v.initial, outputs);
+  j->Key("tuned");
+  WriteRun(j, v.tuned, outputs);
+  j->Key("oracle");
+  if (v.oracle) {
+    WriteRun(j, *v.oracle, outputs);
+    j->Key("oracle_source").Value(v.oracle_source);
+  } else {
+    j->Null();
+  }
+  j->EndObject();
+}
+
+}  // namespace estlab::cli

@@ -1,0 +1,51 @@
+// `estlab tune --validate FILE...`: the filter run on held-out files with the
+// initial, the tuned and (when known) the true noise and parameters. Per file
+// and setting, over the updates after the tuner's --burn-in:
+//
+//   nll_per_step, mean_nis with its 95 % bounds   (studies/study_metrics.h)
+//   pred_rmse_<output>   one-step-ahead prediction RMSE of each output
+//   rmse, mean_nees      when the file has truth columns
+//
+// The true noise comes from --true-q-diag / --true-r-diag, else from the
+// FILE.json that `estlab simulate` writes beside its CSV.
+#ifndef ESTLAB_SRC_CLI_TUNE_VALIDATE_H_
+#define ESTLAB_SRC_CLI_TUNE_VALIDATE_H_
+
+#include <boost/program_options.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "adaptive/tuner.h"
+#include "src/io/json.h"
+#include "src/registry/registry.h"
+#include "studies/study_metrics.h"
+
+namespace estlab::cli {
+
+struct ValidationRun {
+  FilterSummary summary;  // the whole run (status, truth metrics)
+  NoTruthMetrics metrics;  // after the burn-in
+};
+
+struct Validation {
+  std::string path;
+  ValidationRun initial, tuned;
+  std::optional<ValidationRun> oracle;
+  std::string oracle_source;
+};
+
+// Loads every --validate file (with the training files' --column maps; with
+// x0 = first-sample each file gets its own prior mean) and runs the filter.
+// Throws InputError for bad files or options.
+std::vector<Validation> ValidateAll(const boost::program_options::variables_map& vm,
+                                    const ModelEntry& model, const FilterSpec& spec,
+                                    const TuneResult& result, int burn_in);
+
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs);
+void WriteValidationJson(JsonWriter* j, const Validation& v,
+                         const std::vector<std::string>& outputs);
+
+}  // namespace estlab::cli
+
+#endif  // ESTLAB_SRC_CLI_TUNE_VALIDATE_H_

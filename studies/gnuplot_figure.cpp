@@ -1,0 +1,78 @@
+#include "studies/gnuplot_figure.h"
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "src/io/output_file.h"
+
+namespace estlab {
+namespace {
+
+// Runs a shell command, returns its exit status and output.
+int RunCommand(const std::string& command, std::string* output) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return -1;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) *output += buf;
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+std::string GnuplotFigure::Write(const std::string& png_terminal, int width, int height) const {
+  WriteTextFile(folder_ + "/" + name_ + ".dat", dat_.str());
+  std::ostringstream gp;
+  gp << "# estlab figure; redraw with: gnuplot " << name_ << ".gp (in this folder)\n"
+     << "# data: " << name_ << ".dat\n"
+     << "do for [fmt in \"png svg\"] {\n"
+     << "  if (fmt eq \"png\") {\n"
+     << "    set terminal " << png_terminal << " noenhanced size " << width << "," << height
+     << "\n  } else {\n"
+     << "    set terminal svg noenhanced size " << width << "," << height << " dynamic\n"
+     << "  }\n"
+     << "  set output '" << name_ << ".'.fmt\n"
+     << "  reset\n"
+     << "  set grid\n"
+     << "  set key outside right top\n"
+     << body_.str() << "  set output\n}\n";
+  WriteTextFile(folder_ + "/" + name_ + ".gp", gp.str());
+  return folder_ + "/" + name_ + ".gp";
+}
+
+std::string PngTerminal(const std::string& gnuplot, std::string* message) {
+  std::string terminals;
+  if (RunCommand(gnuplot + " -e 'set terminal'", &terminals) != 0) {
+    *message = "gnuplot ('" + gnuplot + "') did not run; the scripts are written";
+    return "";
+  }
+  return terminals.find("pngcairo") == std::string::npos ? "png" : "pngcairo";
+}
+
+bool RenderFigure(const std::string& script, const std::string& gnuplot, std::string* message) {
+  const std::filesystem::path path(script);
+  const std::string folder = path.parent_path().empty() ? "." : path.parent_path().string();
+  std::string log;
+  const int status = RunCommand("cd " + ShellQuote(folder) + " && " + gnuplot + " " +
+                                    ShellQuote(path.filename().string()),
+                                &log);
+  if (status == 0) return true;
+  *message = "gnuplot failed on " + script + ": " + log;
+  return false;
+}
+
+std::string GnuplotQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace estlab
