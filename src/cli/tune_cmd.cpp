@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "src/cli/commands.h"
+#include "src/cli/tune_output_error.h"
 #include "src/cli/tune_profile.h"
 #include "src/cli/tune_validate.h"
 #include "src/core/parse.h"
@@ -211,7 +212,8 @@ void PrintPhysical(const TuneResult& r) {
 }
 
 void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
-                const std::vector<Validation>& validations, const std::string& out_path) {
+                const std::vector<Validation>& validations, double horizon,
+                const std::string& out_path) {
   const int n = int(model.states.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   std::cout << std::setprecision(6);
@@ -254,7 +256,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
   }
   std::cout << "wall time     " << r.wall_s << " s\n";
   const std::vector<std::string>& outputs = model.FindMeasurement(spec.measurement).outputs;
-  for (const Validation& v : validations) PrintValidation(v, outputs);
+  for (const Validation& v : validations) PrintValidation(v, outputs, horizon);
   if (!out_path.empty()) std::cout << "wrote         " << out_path << "\n";
 }
 
@@ -395,6 +397,10 @@ int RunTune(const std::vector<std::string>& args) {
       "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
+      "estimator", po::value<std::string>()->default_value("ml"),
+      "ml (prediction-error maximum likelihood) | output-error (free simulation, least squares)")(
+      "horizon", po::value<std::string>()->default_value("0.5"),
+      "s: output-error windows and the validation's free-simulation RMSE")(
       "profile", po::value<std::string>(),
       "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21)")(
       "profile-out", po::value<std::string>(),
@@ -464,6 +470,11 @@ int RunTune(const std::vector<std::string>& args) {
   options.max_iterations = vm["max-iterations"].as<int>();
   options.seed = SeedOf(settings);
   auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
+  const std::string estimator = vm["estimator"].as<std::string>();
+  if (estimator != "ml" && estimator != "output-error")
+    throw InputError("--estimator: expected ml or output-error, got '" + estimator + "'");
+  const double horizon = ParseNumber(vm["horizon"].as<std::string>(), "--horizon");
+  if (!(horizon > 0)) throw InputError("--horizon must be > 0 s, got " + FormatNumber(horizon));
   options.estimate =
       ParseEstimatedParams(text("estimate-param"), text("param-bounds"), text("param-prior"));
   std::string error;
@@ -488,6 +499,38 @@ int RunTune(const std::vector<std::string>& args) {
     if (!named)
       throw InputError("--profile: '" + profile_request->name + "' is not in --estimate-param");
   }
+  if (estimator == "output-error") {
+    if (profile_request) throw InputError("--profile applies to --estimator ml");
+    OutputErrorOptions oe;
+    oe.horizon = horizon;
+    oe.max_iterations = options.max_iterations;
+    const OutputErrorResult fit = FitOutputError(model, spec, options.estimate, datasets, oe);
+    std::vector<Validation> validations;
+    if (fit.ok && vm.count("validate"))
+      validations = ValidateAll(vm, model, spec, fit.fitted_spec, options.burn_in, horizon);
+    if (fit.ok && out) {
+      out->stream() << "# estlab tune --estimator output-error: model " << model.name
+                    << ", horizon " << FormatDouble(horizon)
+                    << " s; Q and R are the initial ones (output-error does not fit noise)\n";
+      out->stream() << IniLine("q", NoiseParam::kFixed, spec.q_white_accel, spec.qc, spec.q, n);
+      out->stream() << IniLine("r", NoiseParam::kFixed, false, 0.0, spec.r, m);
+      for (size_t i = 0; i < fit.param_names.size(); ++i)
+        out->stream() << "param = " << fit.param_names[i] << "="
+                      << FormatDouble(fit.param_values[i]) << "\n";
+      out->Commit();
+    }
+    const std::string wrote = fit.ok ? out_path : "";
+    if (vm.count("json")) {
+      std::cout << OutputErrorJson(model, spec, fit, horizon, validations, wrote) << "\n";
+    } else {
+      PrintOutputError(model, spec, fit, horizon, validations, wrote);
+    }
+    if (!fit.ok) {
+      std::cerr << "estlab: error: output-error: " << fit.message << "\n";
+      return 1;
+    }
+    return 0;
+  }
   const TuneResult result = model.tune(spec, options, datasets);
   std::optional<ProfileResult> profile;
   std::vector<std::string> profile_files;
@@ -498,7 +541,7 @@ int RunTune(const std::vector<std::string>& args) {
   }
   std::vector<Validation> validations;
   if (result.IsSolutionUsable() && vm.count("validate"))
-    validations = ValidateAll(vm, model, spec, result, options.burn_in);
+    validations = ValidateAll(vm, model, spec, result.tuned_spec, options.burn_in, horizon);
   if (result.IsSolutionUsable() && out) {
     out->stream() << "# estlab tune: model " << model.name << ", measurement " << spec.measurement
                   << ", filter " << FilterKindName(spec.kind()) << ", NLL "
@@ -516,7 +559,7 @@ int RunTune(const std::vector<std::string>& args) {
                             result.IsSolutionUsable() ? out_path : "", profile, profile_files)
               << "\n";
   } else {
-    PrintHuman(model, spec, result, datasets.size(), validations,
+    PrintHuman(model, spec, result, datasets.size(), validations, horizon,
                result.IsSolutionUsable() ? out_path : "");
     if (profile) PrintProfile(*profile, profile_files, profile_message);
   }

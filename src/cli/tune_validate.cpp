@@ -8,6 +8,7 @@
 
 #include "src/core/parse.h"
 #include "src/options/filter_flags.h"
+#include "studies/output_error.h"
 
 namespace estlab::cli {
 namespace {
@@ -58,23 +59,25 @@ std::vector<double> SidecarParams(const std::string& text, const ModelEntry& mod
 }
 
 ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const FilterData& data,
-                    const std::vector<std::string>& outputs, int burn_in) {
+                    const std::vector<std::string>& outputs, int burn_in, double horizon) {
   const FilterRunOutput out = model.run_filter(spec, data);
   // The burn-in counts updates, as the tuner's; rows without an update are
   // few in recorded data, so skip that many rows.
-  return {out.summary, ComputeNoTruthMetrics(out, outputs, burn_in)};
+  ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}};
+  if (data.has_truth && !model.has_input) r.free_rmse = FreeSimulationRmse(model, spec, data, horizon);
+  return r;
 }
 
 Validation ValidateOne(const po::variables_map& vm, const std::string& path,
-                       const ModelEntry& model, const FilterSpec& spec, const TuneResult& result,
-                       int burn_in) {
+                       const ModelEntry& model, const FilterSpec& spec, const FilterSpec& tuned,
+                       int burn_in, double horizon) {
   Validation v;
   v.path = path;
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm));
   CheckPriorTime(spec, data);
-  v.initial = RunOn(model, spec, data, meas.outputs, burn_in);
-  v.tuned = RunOn(model, result.tuned_spec, data, meas.outputs, burn_in);
+  v.initial = RunOn(model, spec, data, meas.outputs, burn_in, horizon);
+  v.tuned = RunOn(model, tuned, data, meas.outputs, burn_in, horizon);
 
   // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar
   // (whose parameters are then the true ones too).
@@ -111,7 +114,7 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
     for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
     oracle.r.assign(m * m, 0.0);
     for (int i = 0; i < m; ++i) oracle.r[i * m + i] = r_diag[i];
-    v.oracle = RunOn(model, oracle, data, meas.outputs, burn_in);
+    v.oracle = RunOn(model, oracle, data, meas.outputs, burn_in, horizon);
     v.oracle_source = source;
   }
   return v;
@@ -120,21 +123,23 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
 }  // namespace
 
 std::vector<Validation> ValidateAll(const po::variables_map& vm, const ModelEntry& model,
-                                    const FilterSpec& spec, const TuneResult& result,
-                                    int burn_in) {
+                                    const FilterSpec& spec, const FilterSpec& tuned, int burn_in,
+                                    double horizon) {
   if (model.run_filter == nullptr)
     throw InputError("--validate: the filter runner of model '" + model.name +
                      "' is not available");
   std::vector<Validation> out;
   for (const std::string& path : vm["validate"].as<std::vector<std::string>>())
-    out.push_back(ValidateOne(vm, path, model, spec, result, burn_in));
+    out.push_back(ValidateOne(vm, path, model, spec, tuned, burn_in, horizon));
   return out;
 }
 
-void PrintValidation(const Validation& v, const std::vector<std::string>& outputs) {
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs,
+                     double horizon) {
   std::cout << "\nvalidation on " << v.path
             << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
-            << outputs.size() << ")   mean NEES   RMSE\n";
+            << outputs.size() << ")   free-sim RMSE over " << horizon
+            << " s   mean NEES   RMSE\n";
   auto row = [&](const char* name, const ValidationRun& r) {
     const NoTruthMetrics& m = r.metrics;
     std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
@@ -142,6 +147,9 @@ void PrintValidation(const Validation& v, const std::vector<std::string>& output
               << m.nis_bounds95[0] << " .. " << m.nis_bounds95[1] << ")  ";
     for (size_t i = 0; i < m.pred_rmse.size(); ++i)
       std::cout << (i ? ", " : "") << m.pred_rmse[i];
+    std::cout << "  ";
+    for (size_t i = 0; i < r.free_rmse.size(); ++i) std::cout << (i ? ", " : "") << r.free_rmse[i];
+    if (r.free_rmse.empty()) std::cout << "-";
     const FilterSummary& s = r.summary;
     if (!s.rmse.empty()) {
       std::cout << "  " << std::setw(9) << s.mean_nees << "  ";
@@ -168,6 +176,11 @@ void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::stri
   j->Key("pred_rmse").BeginObject();
   for (size_t i = 0; i < outputs.size(); ++i) j->Key(outputs[i]).Value(m.pred_rmse[i]);
   j->EndObject();
+  if (!r.free_rmse.empty()) {
+    j->Key("free_rmse").BeginObject();
+    for (size_t i = 0; i < outputs.size(); ++i) j->Key(outputs[i]).Value(r.free_rmse[i]);
+    j->EndObject();
+  }
   if (!s.rmse.empty()) {
     j->Key("rmse").BeginObject();
     for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);

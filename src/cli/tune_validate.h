@@ -5,6 +5,8 @@
 //   nll_per_step, mean_nis with its 95 % bounds   (studies/study_metrics.h)
 //   pred_rmse_<output>   one-step-ahead prediction RMSE of each output
 //   rmse, mean_nees      when the file has truth columns
+//   free_rmse_<output>   the free simulation over `horizon` s windows from
+//                        the recorded states (output_error.h), ditto
 //
 // The true noise comes from --true-q-diag / --true-r-diag, else from the
 // FILE.json that `estlab simulate` writes beside its CSV.
@@ -24,8 +26,11 @@
 namespace estlab::cli {
 
 struct ValidationRun {
-  FilterSummary summary;  // the whole run (status, truth metrics)
+  FilterSummary summary;   // the whole run (status, truth metrics)
   NoTruthMetrics metrics;  // after the burn-in
+  // Free-simulation RMSE per output over windows of `horizon` s from the
+  // recorded states (studies/output_error.h); empty without state columns.
+  std::vector<double> free_rmse;
 };
 
 struct Validation {
@@ -40,9 +45,10 @@ struct Validation {
 // Throws InputError for bad files or options.
 std::vector<Validation> ValidateAll(const boost::program_options::variables_map& vm,
                                     const ModelEntry& model, const FilterSpec& spec,
-                                    const TuneResult& result, int burn_in);
+                                    const FilterSpec& tuned, int burn_in, double horizon);
 
-void PrintValidation(const Validation& v, const std::vector<std::string>& outputs);
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs,
+                     double horizon);
 void WriteValidationJson(JsonWriter* j, const Validation& v,
                          const std::vector<std::string>& outputs);
 

@@ -1,0 +1,73 @@
+#include "src/cli/tune_output_error.h"
+
+#include <iomanip>
+#include <iostream>
+
+#include "src/io/json.h"
+
+namespace estlab::cli {
+
+void PrintOutputError(const ModelEntry& model, const FilterSpec& spec,
+                      const OutputErrorResult& r, double horizon,
+                      const std::vector<Validation>& validations, const std::string& out_path) {
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+  std::cout << std::setprecision(6) << "model         " << model.name << ", measurement "
+            << spec.measurement << "\nestimator     output-error least squares, free simulation"
+            << " over " << horizon << " s windows from the recorded states\ndata          "
+            << r.windows << " windows, " << r.residuals << " residuals\nCeres         "
+            << r.message << " (" << r.iterations << " iterations)\n";
+  std::cout << "\n  model parameter               initial     estimate         SE\n";
+  for (size_t j = 0; j < r.param_names.size(); ++j) {
+    std::cout << "  " << std::left << std::setw(26) << r.param_names[j] << std::right
+              << std::setw(12) << r.param_initial[j] << " " << std::setw(12) << r.param_values[j]
+              << " " << std::setw(10) << r.param_std_errors[j]
+              << (r.at_bound[j] ? "  at a bound" : "") << "\n";
+  }
+  for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
+  std::cout << "\nresidual sd   " << r.residual_sd << "\nfit RMSE      ";
+  for (size_t j = 0; j < r.rmse.size(); ++j)
+    std::cout << (j ? ", " : "") << meas.outputs[j] << " " << r.rmse[j];
+  std::cout << "\nwall time     " << r.wall_s << " s\n";
+  for (const Validation& v : validations) PrintValidation(v, meas.outputs, horizon);
+  if (!out_path.empty()) std::cout << "wrote         " << out_path << "\n";
+}
+
+std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
+                            const OutputErrorResult& r, double horizon,
+                            const std::vector<Validation>& validations,
+                            const std::string& out_path) {
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+  JsonWriter j;
+  j.BeginObject().Key("model").Value(model.name).Key("measurement").Value(spec.measurement);
+  j.Key("estimator").Value("output-error").Key("horizon").Value(horizon);
+  j.Key("status").Value(r.ok ? (r.converged ? "converged" : "no-convergence") : "failed");
+  j.Key("message").Value(r.message);
+  j.Key("tuned").BeginObject().Key("params").BeginObject();
+  for (size_t i = 0; i < r.param_names.size(); ++i) j.Key(r.param_names[i]).Value(r.param_values[i]);
+  j.EndObject().EndObject();
+  j.Key("std_errors").BeginObject();
+  for (size_t i = 0; i < r.param_names.size(); ++i)
+    j.Key(r.param_names[i]).Value(r.param_std_errors[i]);
+  j.EndObject();
+  j.Key("params_initial").BeginObject();
+  for (size_t i = 0; i < r.param_names.size(); ++i)
+    j.Key(r.param_names[i]).Value(r.param_initial[i]);
+  j.EndObject();
+  j.Key("parameters").Value(r.names).Key("theta").Value(r.theta);
+  j.Key("identifiability").Value(r.identifiability);
+  j.Key("residual_sd").Value(r.residual_sd).Key("fit_rmse").BeginObject();
+  for (size_t i = 0; i < r.rmse.size(); ++i) j.Key(meas.outputs[i]).Value(r.rmse[i]);
+  j.EndObject();
+  j.Key("windows").Value(r.windows).Key("residuals").Value(r.residuals);
+  j.Key("iterations").Value(r.iterations).Key("wall_s").Value(r.wall_s);
+  if (!validations.empty()) {
+    j.Key("validation").BeginArray();
+    for (const Validation& v : validations) WriteValidationJson(&j, v, meas.outputs);
+    j.EndArray();
+  }
+  if (!out_path.empty()) j.Key("out").Value(out_path);
+  j.EndObject();
+  return j.str();
+}
+
+}  // namespace estlab::cli

@@ -1,0 +1,27 @@
+// The report of `estlab tune --estimator output-error` (studies/output_error.h):
+// text and JSON, in the shape of the prediction-error report so that scripts
+// read both alike ("tuned": {"params": ...}, "std_errors", "validation").
+#ifndef ESTLAB_SRC_CLI_TUNE_OUTPUT_ERROR_H_
+#define ESTLAB_SRC_CLI_TUNE_OUTPUT_ERROR_H_
+
+#include <string>
+#include <vector>
+
+#include "src/cli/tune_validate.h"
+#include "src/registry/registry.h"
+#include "studies/output_error.h"
+
+namespace estlab::cli {
+
+void PrintOutputError(const ModelEntry& model, const FilterSpec& spec,
+                      const OutputErrorResult& r, double horizon,
+                      const std::vector<Validation>& validations, const std::string& out_path);
+
+std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
+                            const OutputErrorResult& r, double horizon,
+                            const std::vector<Validation>& validations,
+                            const std::string& out_path);
+
+}  // namespace estlab::cli
+
+#endif  // ESTLAB_SRC_CLI_TUNE_OUTPUT_ERROR_H_
