@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -265,6 +266,60 @@ TEST_F(TuneCli, EstimatesParametersAndWritesThemForFilter) {
     const CmdResult e = Estlab("tune " + filter +
                                "--data train.csv --init-q-white-accel 1e-2 --init-r-diag 1e-2 " +
                                bad + " --out bad.ini");
+    EXPECT_EQ(e.exit_code, 2) << bad << "\n" << e.err;
+    EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;
+    EXPECT_FALSE(Exists("bad.ini")) << bad;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Output-error, repeatable --validate with free-simulation RMSE, --profile
+// and x0 = first-sample, on simulated data with state columns.
+TEST_F(TuneCli, OutputErrorValidationProfileAndFirstSample) {
+  for (int seed : {3, 4}) {
+    const CmdResult s = Estlab(
+        "simulate --model pendulum --param L=0.5,b=0.3 --x0 theta=1.2 --t-end 10 --dt 0.01 "
+        "--integrator rk4 --process-noise-var 0,1e-4 --measure angle --meas-noise-var 1e-4 "
+        "--seed " + std::to_string(seed) + " --out run" + std::to_string(seed) + ".csv");
+    ASSERT_EQ(s.exit_code, 0) << s.err;
+  }
+  const std::string base =
+      "tune --model pendulum --measure angle --filter ekf --integrator rk4 --x0 first-sample "
+      "--p0-diag 1e-2,1 --data run3.csv --param L=0.8,b=0.1 --estimate-param L,b "
+      "--init-q-white-accel 1e-2 --init-r-diag 1e-2 --validate run4.csv --validate run3.csv ";
+  const CmdResult oe = Estlab(base + "--estimator output-error --horizon 0.5 --json --out oe.ini");
+  ASSERT_EQ(oe.exit_code, 0) << oe.err << oe.out;
+  for (const char* key : {"\"estimator\": \"output-error\"", "\"tuned\": {\"params\": {\"L\": ",
+                          "\"free_rmse\": {\"theta\": ", "\"pred_rmse\": {\"theta\": ",
+                          "\"data\": \"run4.csv\"", "\"data\": \"run3.csv\""}) {
+    EXPECT_NE(oe.out.find(key), std::string::npos) << "missing " << key << " in\n" << oe.out;
+  }
+  EXPECT_NE(Slurp(File("oe.ini")).find("param = L="), std::string::npos);
+  const CmdResult ml = Estlab(base + "--profile b=0.1:0.5:5 --profile-out prof_b");
+  ASSERT_EQ(ml.exit_code, 0) << ml.err << ml.out;
+  EXPECT_NE(ml.out.find("profile likelihood of b"), std::string::npos) << ml.out;
+  EXPECT_NE(ml.out.find("free-sim RMSE over 0.5 s"), std::string::npos) << ml.out;
+  const std::string csv = Slurp(File("prof_b.csv"));
+  EXPECT_EQ(csv.rfind("b,nll,delta_nll,status\n", 0), 0u) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 6);
+  EXPECT_TRUE(Exists("prof_b.gp"));
+  // The profile's minimum is at the grid point nearest the estimate (0.3).
+  std::istringstream rows(csv.substr(csv.find('\n') + 1));
+  double best_b = 0.0, best_delta = 1e300;
+  for (std::string row; std::getline(rows, row);) {
+    const double b = std::stod(row), delta = std::stod(row.substr(row.find(',', row.find(',') + 1) + 1));
+    if (delta < best_delta) best_delta = delta, best_b = b;
+  }
+  EXPECT_NEAR(best_b, 0.3, 1e-12) << csv;
+
+  for (const std::string& bad :
+       {base + "--estimator nope", base + "--horizon 0", base + "--profile g",
+        base + "--estimator output-error --profile L",
+        base + "--profile L=2:1", base + "--profile-out p"}) {
+    const CmdResult e = Estlab(bad + " --out bad.ini");
     EXPECT_EQ(e.exit_code, 2) << bad << "\n" << e.err;
     EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;
     EXPECT_FALSE(Exists("bad.ini")) << bad;
