@@ -73,7 +73,15 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
         "fails within one finite-difference step of it)");
     return r;
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Hs);
+  // Relative units for the parameters optimised on their natural scale (a
+  // friction of 5e-5 N m s next to log variances): theta_i = s_i u_i with
+  // s_i = |theta_i| (1 for log parameters and zeros), so that the flatness
+  // test compares like with like. cov = S cov_u S.
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(k);
+  for (int i = 0; i < k; ++i)
+    if (!is_log[i] && theta[i] != 0.0) scale(i) = std::abs(theta[i]);
+  const Eigen::MatrixXd Hu = scale.asDiagonal() * Hs * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Hu);
   const Eigen::VectorXd& lambda = eig.eigenvalues();
   const Eigen::MatrixXd& V = eig.eigenvectors();
   for (int j = 0; j < k; ++j) r.eigenvalues.push_back(lambda(j));
@@ -105,8 +113,9 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
     if (lambda(j) < -kFlatRatio * top) {
       r.sentences.push_back("the NLL curves downwards along " + DirectionText(v, involved, names) +
                             " (eigenvalue " + FormatNumber(lambda(j)) +
-                            "): not a minimum; the optimiser stopped early, so these standard "
-                            "errors are not given");
+                            "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
+                            "valley); fix one of these parameters or restart from here, no "
+                            "standard errors for them");
     } else if (involved.size() == 1) {
       r.sentences.push_back("the data do not determine " + plain[involved[0]] +
                             ": the NLL is flat along it (no standard error)");
@@ -121,6 +130,7 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
                             " (no standard errors for them)");
     }
   }
+  cov = scale.asDiagonal() * cov * scale.asDiagonal();
   for (int i = 0; i < k; ++i)
     if (!unidentified[i] && cov(i, i) > 0) r.std_errors[i] = std::sqrt(cov(i, i));
   for (int i = 0; i < k; ++i) {

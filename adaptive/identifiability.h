@@ -2,11 +2,13 @@
 // information H (the Hessian of the NLL at the optimum, on the tuner's theta
 // scale), in plain types: compiled once, not per model.
 //
-//   H = V diag(lambda) V^T   (ascending lambda)
+//   theta_i = s_i u_i, s_i = |theta_i| for a parameter on its natural scale
+//   (relative units), 1 for a log parameter
+//   S H S = V diag(lambda) V^T   (ascending lambda)
 //   a direction v_j is flat when lambda_j <= kFlatRatio * max |lambda|
 //   (the data do not determine theta along it); negative curvature there
 //   means the optimiser stopped off a minimum
-//   cov = sum over the other directions of v_j v_j^T / lambda_j
+//   cov = S (sum over the other directions of v_j v_j^T / lambda_j) S
 //   SE_i = sqrt(cov_ii), +inf when theta_i has a component in a flat direction
 //
 // A flat direction is described by the parameters it involves. On two log

@@ -327,3 +327,41 @@ TEST_F(TuneCli, OutputErrorValidationProfileAndFirstSample) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 12, done-when 4: the real single-pendulum recording (one training
+// piece of examples/data/multiarm/single), the built-in pendulum with the
+// recorded angle (from upright) shifted by pi. The joint fit of L, b with Q
+// and R on all four pieces gives L = 0.15316 (omega0^2 = g / L = 64.05 1/s^2)
+// and b = 0.0555 1/s (docs/real-data.md); one piece must land near it, with
+// finite standard errors and no identifiability note, and output-error on the
+// same piece near its own 4-piece value.
+TEST_F(TuneCli, RealSinglePendulumPieceFitsLengthAndDamping) {
+  const std::string data = std::string(ESTLAB_SOURCE_DIR) + "/examples/data/multiarm/single/";
+  const std::string base =
+      "tune --model pendulum --measure angle --filter ekf --integrator rk4 --data " + data +
+      "train_1.csv --column z_theta=theta-pi --column theta=theta-pi --x0 first-sample "
+      "--p0-diag 0.01,100 --burn-in 50 --param L=0.15,b=0.05 --estimate-param L,b "
+      "--init-q-white-accel 1 --init-r-diag 1e-6 --json ";
+  auto number_after = [](const std::string& text, const std::string& key) {
+    const size_t at = text.find(key);
+    return at == std::string::npos ? std::nan("") : std::stod(text.substr(at + key.size()));
+  };
+  const CmdResult ml = Estlab(base);
+  ASSERT_EQ(ml.exit_code, 0) << ml.err << ml.out;
+  const double L = number_after(ml.out, "\"params\": {\"L\": ");
+  const double se_L = number_after(ml.out, "\"std_errors\": {\"L\": ");
+  const double b = number_after(ml.out, "\"b\": ");
+  std::printf("  one piece, ml: L %.6f (SE %.2g), omega0^2 %.3f, b %.4f\n", L, se_L, 9.81 / L, b);
+  EXPECT_NEAR(L, 0.15316, 0.002) << ml.out;
+  EXPECT_GT(b, 0.03) << ml.out;
+  EXPECT_LT(b, 0.08) << ml.out;
+  EXPECT_TRUE(std::isfinite(se_L) && se_L > 0 && se_L < 1e-3) << ml.out;
+  EXPECT_NE(ml.out.find("\"identifiability\": []"), std::string::npos) << ml.out;
+  const CmdResult oe = Estlab(base + "--estimator output-error --horizon 0.5");
+  ASSERT_EQ(oe.exit_code, 0) << oe.err << oe.out;
+  EXPECT_NEAR(number_after(oe.out, "\"params\": {\"L\": "), 0.15286, 0.002) << oe.out;
+}
+
+}  // namespace
