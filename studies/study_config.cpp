@@ -119,7 +119,7 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
     if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
     nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
     auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
-    nc.role = text_of("q") == "tuned" || text_of("r") == "tuned"     ? "tuned"
+    nc.role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params") ? "tuned"
               : text_of("q") == "oracle" && text_of("r") == "oracle" ? "oracle"
                                                                      : "hand";
     if (v.Has("role")) {

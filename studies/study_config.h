@@ -89,6 +89,9 @@
 //   q-param = white-accel            #   parameterisation unless q-param / r-param say
 //   tune-datasets = 3                #   diag | full | white-accel | scalar
 //   tune-starts = 2                  # multi-start (default 1); tune-burn-in = 0
+//   params = tuned L,b               # also fit these model parameters (from the
+//   param-bounds = b=0:5             #   scenario's params), as estlab tune
+//   param-prior = L=normal:1:0.1     #   --estimate-param; the filters run with them
 //
 //   [report]                         # optional: the paper's numbers and claims
 //   paper = 002

@@ -6,6 +6,7 @@
 #include "adaptive/tuner.h"
 #include "src/core/parse.h"
 #include "src/io/output_file.h"
+#include "src/options/estimate_flags.h"
 #include "src/options/filter_settings.h"
 #include "studies/study_config_parts.h"
 
@@ -150,7 +151,34 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   // Simulated runs: the prior holds at t = 0; recorded runs: at the first row.
   spec.has_t0 = !sc.measure_at_t0 && !sc.recorded;
   spec.t0 = 0.0;
-  if (q_tuned || r_tuned) {
+  // params = tuned NAME,...: the physical parameters fitted with Q and R.
+  std::vector<EstimatedParam> estimate;
+  if (noise.Has("params")) {
+    const Value& v = *noise.Get("params");
+    const std::string text = Trim(v.text);
+    if (text.rfind("tuned", 0) != 0 || Trim(text.substr(5)).empty())
+      noise.Fail("params", "expected 'tuned NAME[,NAME...]', got '" + v.text + "'");
+    auto text_of = [&](const char* key) { return noise.Has(key) ? noise.Get(key)->text : ""; };
+    estimate = Checked(v, err, [&](const std::string&) {
+      return ParseEstimatedParams(Trim(text.substr(5)), text_of("param-bounds"),
+                                  text_of("param-prior"));
+    });
+    for (const EstimatedParam& e : estimate) {
+      std::string known;
+      bool found = false;
+      for (const ParamDesc& p : model.params) {
+        known += (known.empty() ? "" : ", ") + p.name;
+        found = found || p.name == e.name;
+      }
+      if (!found)
+        noise.Fail("params", "model '" + model.name + "' has no parameter '" + e.name +
+                                 "' (it has " + known + ")");
+    }
+  } else {
+    for (const char* key : {"param-bounds", "param-prior"})
+      if (noise.Has(key)) noise.Fail(key, "applies only with params = tuned ...");
+  }
+  if (q_tuned || r_tuned || !estimate.empty()) {
     combo.tune = true;
     // A model file compiles its tuner now, on first use (the same entry).
     if (model.tune == nullptr) FindModel(sc.model_source, {.tuner = true});
@@ -188,7 +216,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     combo.tune_datasets = int(integer("tune-datasets", 3, 1));
     if (sc.recorded) {
       // The tuning runs are the scenario's tune-data files.
-      const std::string key = q_tuned ? "q" : "r";
+      const std::string key = q_tuned ? "q" : r_tuned ? "r" : "params";
       if (noise.Has("tune-datasets"))
         noise.Fail("tune-datasets",
                    "not used on recorded data ([" + sc.section + "] fits on its tune-data files)");
@@ -197,6 +225,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       combo.tune_datasets = int(sc.tune_runs.size());
     }
     t.starts = int(integer("tune-starts", 1, 1));
+    t.estimate = estimate;
     t.burn_in = int(integer("tune-burn-in", 0, 0));
     t.compute_std_errors = true;
     std::string error;
@@ -230,6 +259,7 @@ std::string NoiseDescription(const SectionValues& noise) {
   };
   std::string d = "Q " + describe("q", {"q", "q-diag", "q-white-accel"}) + ", R " +
                   describe("r", {"r", "r-diag"});
+  if (noise.Has("params")) d += ", model parameters " + noise.Get("params")->text;
   if (noise.Has("tune-datasets") || noise.Has("tune-starts"))
     d += " (" + (noise.Has("tune-datasets") ? noise.Get("tune-datasets")->text : "3") +
          " tuning trajectories, " +

@@ -120,7 +120,8 @@ const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-
                                              "init-q-diag", "init-q",        "init-q-white-accel",
                                              "init-r-diag", "init-r",        "q-param",
                                              "r-param",     "tune-datasets", "tune-starts",
-                                             "tune-burn-in"};
+                                             "tune-burn-in", "params",       "param-bounds",
+                                             "param-prior"};
 
 // ---------------------------------------------------------------------------
 // Reading the file with Program_options.

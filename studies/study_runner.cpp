@@ -321,10 +321,20 @@ std::string JoinValues(const std::vector<double>& v) {
   return out;
 }
 
+// "L=0.49;b=0.31": the model parameters fitted with the noise (params =
+// tuned ...), "" when none.
+std::string TunedParamsText(const TuneResult& r) {
+  std::string out;
+  for (size_t i = 0; i < r.param_names.size(); ++i)
+    out += (i ? ";" : "") + r.param_names[i] + "=" + Sig10(r.param_values[i]);
+  return out;
+}
+
 std::vector<std::string> TunedColumns() {
   return {"scenario", "filter",      "noise",     "status",     "datasets",
           "updates",  "nll_initial", "nll_tuned", "iterations", "q_param",
-          "r_param",  "qc",          "q",         "r",          "message"};
+          "r_param",  "qc",          "q",         "r",          "message",
+          "params"};
 }
 
 // Runs every tuning (in parallel over `jobs` threads, results in a fixed
@@ -388,7 +398,7 @@ std::string TuneNoise(StudyConfig* config, int jobs) {
            std::to_string(r.updates), Sig10(r.nll_initial), Sig10(r.nll_tuned),
            std::to_string(r.iterations), NoiseParamName(cb.tuner.q_param),
            NoiseParamName(cb.tuner.r_param), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
-           JoinValues(r.r), failure});
+           JoinValues(r.r), failure, TunedParamsText(r)});
     }
   };
   std::vector<std::thread> threads;

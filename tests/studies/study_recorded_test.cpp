@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -213,6 +215,57 @@ TEST_F(RecordedStudy, SubsetStudyReportsMetricsWithoutTruth) {
   EXPECT_TRUE(dir.Exists("out/figures/single_nees_nis.gp"));
   EXPECT_FALSE(dir.Exists("out/figures/single_rmse_means.gp"));
   EXPECT_FALSE(dir.Exists("out/figures/single_rmse_time.gp"));
+}
+
+}  // namespace
+}  // namespace estlab::testing
+
+namespace estlab::testing {
+namespace {
+
+// A noise section may fit model parameters with Q and R (`params = tuned
+// L,b`): tuned.csv lists them, the filters run with them, bad keys name
+// their line.
+TEST_F(RecordedStudy, NoiseSectionFitsModelParametersWithQAndR) {
+  const std::string fit =
+      "\n[noise.fit]\nq = tuned\ninit-q-white-accel = 1\nr = tuned\ninit-r-diag = 1e-6\n"
+      "tune-burn-in = 20\nparams = tuned L,b\nparam-bounds = b=0:1\nfilters = ekf\n";
+  TempDir dir;
+  {
+    std::ofstream out(dir.File("fit.ini"));
+    std::string text = ConfigText();  // its data paths made absolute
+    for (size_t at; (at = text.find("../../../examples")) != std::string::npos;)
+      text.replace(at, 17, std::string(ESTLAB_SOURCE_DIR) + "/examples");
+    out << text << fit;
+  }
+  const auto r = RunEstlab("study fit.ini --out out --jobs 2 --quiet", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string tuned = ReadFile(dir.File("out/tuned.csv"));
+  const size_t at = tuned.find("single,ekf,fit,converged");
+  ASSERT_NE(at, std::string::npos) << tuned;
+  const std::string row = tuned.substr(at, tuned.find('\n', at) - at);
+  const size_t l = row.find("L=");
+  ASSERT_NE(l, std::string::npos) << row;
+  EXPECT_NEAR(std::stod(row.substr(l + 2)), 0.1532, 0.002) << row;  // g / L = 64 1/s^2
+  EXPECT_NE(row.find(";b="), std::string::npos) << row;
+  EXPECT_NE(ReadFile(dir.File("out/report.md")).find("model parameters tuned L,b"),
+            std::string::npos);
+
+  const std::string text = ConfigText() + fit;
+  const std::string no_tuned = Replace(text, "params = tuned L,b", "params = L,b");
+  const auto lines = SplitLines(no_tuned);
+  const size_t line = size_t(std::find(lines.begin(), lines.end(), "params = L,b") - lines.begin());
+  EXPECT_EQ(ParseError(no_tuned), kConfig + ":" + std::to_string(line + 1) +
+                                      ": [noise.fit] params: expected 'tuned NAME[,NAME...]', got "
+                                      "'L,b'");
+  const std::string bad_name = Replace(text, "params = tuned L,b", "params = tuned len,b");
+  EXPECT_NE(ParseError(bad_name).find("[noise.fit] params: model 'pendulum' has no parameter 'len' (it has g, L, b)"),
+            std::string::npos)
+      << ParseError(bad_name);
+  const std::string stray = Replace(text, "params = tuned L,b\n", "");
+  EXPECT_NE(ParseError(stray).find("param-bounds: applies only with params = tuned"),
+            std::string::npos)
+      << ParseError(stray);
 }
 
 }  // namespace
