@@ -1,6 +1,7 @@
 // estlab simulate: truth trajectories and noisy measurements.
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -79,6 +80,31 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   return j.str() + "\n";
 }
 
+// The `param = NAME=VALUE` lines of a tuned.ini; its filter noise lines are
+// skipped, any other key is an error naming FILE:LINE.
+std::vector<std::pair<std::string, double>> ConfigParams(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("--config: cannot read '" + path + "'");
+  std::vector<std::pair<std::string, double>> out;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::string text = Trim(line.substr(0, line.find('#')));
+    if (text.empty()) continue;
+    const size_t eq = text.find('=');
+    const std::string where = path + ":" + std::to_string(number);
+    if (eq == std::string::npos) throw InputError(where + ": expected KEY = VALUE, got '" + text + "'");
+    const std::string key = Trim(text.substr(0, eq)), value = Trim(text.substr(eq + 1));
+    if (key == "param") {
+      for (const auto& p : ParseAssignments({value}, where + ": param")) out.push_back(p);
+    } else if (key != "q" && key != "q-diag" && key != "q-white-accel" && key != "r" &&
+               key != "r-diag") {
+      throw InputError(where + ": 'estlab simulate --config' reads 'param' lines (and skips a "
+                               "tuned.ini's Q and R), not '" + key + "'");
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int RunSimulate(const std::vector<std::string>& args) {
@@ -109,6 +135,9 @@ int RunSimulate(const std::vector<std::string>& args) {
       "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
       "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
       "seed", po::value<unsigned long>()->default_value(1), "random seed")(
+      "config", po::value<std::string>(),
+      "read 'param = NAME=VALUE' lines from a file (the tuned.ini of 'estlab tune "
+      "--estimate-param'; its Q/R lines are for 'estlab filter' and skipped); --param wins")(
       "out", po::value<std::string>(), "output CSV path")("json", "print a JSON summary on stdout");
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -119,12 +148,19 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("out")) throw InputError("--out is required");
+  if (vm.count("config"))
+    RefuseOutputOverInput("--out", vm["out"].as<std::string>(), {vm["config"].as<std::string>()});
 
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   SimulationSpec spec;
-  spec.params = model.ResolveParams(
-      vm.count("param") ? ParseAssignments(vm["param"].as<std::vector<std::string>>(), "--param")
-                        : std::vector<std::pair<std::string, double>>{});
+  std::vector<std::pair<std::string, double>> params =
+      vm.count("config") ? ConfigParams(vm["config"].as<std::string>())
+                         : std::vector<std::pair<std::string, double>>{};
+  if (vm.count("param")) {  // the command line wins
+    for (const auto& p : ParseAssignments(vm["param"].as<std::vector<std::string>>(), "--param"))
+      params.push_back(p);
+  }
+  spec.params = model.ResolveParams(params);
   spec.x0 = model.ResolveState(
       vm.count("x0") ? ParseAssignments(vm["x0"].as<std::vector<std::string>>(), "--x0")
                      : std::vector<std::pair<std::string, double>>{},

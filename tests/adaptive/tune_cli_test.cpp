@@ -259,6 +259,23 @@ TEST_F(TuneCli, EstimatesParametersAndWritesThemForFilter) {
   const size_t at = f.out.find("\"mean_nis\": ");
   ASSERT_NE(at, std::string::npos) << f.out;
   EXPECT_NEAR(std::stod(f.out.substr(at + 12)), 1.0, 0.15) << f.out;
+  // `estlab simulate --config tuned.ini` takes the parameters (and skips Q/R).
+  const CmdResult sim = Estlab(
+      "simulate --model pendulum --config tuned.ini --x0 theta=1 --t-end 1 --out sim.csv --json");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const std::string sidecar = Slurp(File("sim.csv.json"));  // the simulation's parameters
+  const size_t l_at = sidecar.find("\"L\": ");
+  ASSERT_NE(l_at, std::string::npos) << sidecar;
+  EXPECT_DOUBLE_EQ(std::stod(sidecar.substr(l_at + 5)), L) << sidecar;
+  {
+    std::ofstream bad(File("bad_sim.ini"));
+    bad << "param = L=0.5\nfilter = ekf\n";
+  }
+  const CmdResult bad_sim =
+      Estlab("simulate --model pendulum --config bad_sim.ini --t-end 1 --out sim2.csv");
+  EXPECT_EQ(bad_sim.exit_code, 2);
+  EXPECT_NE(bad_sim.err.find("bad_sim.ini:2: "), std::string::npos) << bad_sim.err;
+  EXPECT_FALSE(Exists("sim2.csv"));
 
   for (const std::string& bad :
        {std::string("--estimate-param len"), std::string("--estimate-param L --param-bounds b=0:1"),
