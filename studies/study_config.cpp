@@ -33,22 +33,22 @@ StudySettings ParseStudy(const SectionValues& v) {
                      [](const std::string& t) { return uint64_t(ParseInteger(t, "seed", 0)); });
   if (v.Has("runs"))
     s.runs = Checked(*v.Get("runs"), err,
-                     [](const std::string& t) { return int(ParseInteger(t, "runs", 1)); });
+                     [](const std::string& t) { return ParseCount(t, "runs", 1, kMaxRuns); });
   if (v.Has("jobs"))
     s.jobs = Checked(*v.Get("jobs"), err,
-                     [](const std::string& t) { return int(ParseInteger(t, "jobs", 1)); });
+                     [](const std::string& t) { return ParseCount(t, "jobs", 1, 1024); });
   if (v.Has("keep-runs")) {
     s.keep_runs = Checked(*v.Get("keep-runs"), err, [](const std::string& t) {
       std::vector<int> runs;
       if (t == "none") return runs;
       for (const auto& part : Split(t, ','))
-        runs.push_back(int(ParseInteger(part, "keep-runs", 0)));
+        runs.push_back(ParseCount(part, "keep-runs", 0, kMaxRuns - 1));
       return runs;
     });
   }
   if (v.Has("step-metrics-every"))
     s.step_metrics_every = Checked(*v.Get("step-metrics-every"), err, [](const std::string& t) {
-      return int(ParseInteger(t, "step-metrics-every", 1));
+      return ParseCount(t, "step-metrics-every", 1, kMaxSteps);
     });
   return s;
 }

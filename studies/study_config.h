@@ -122,6 +122,12 @@
 
 namespace estlab {
 
+// The largest counts a study config accepts (ParseCount): runs per study,
+// steps per run (and burn-in, step-metrics-every), truth substeps.
+inline constexpr int kMaxRuns = 100000000;
+inline constexpr int kMaxSteps = 100000000;
+inline constexpr int kMaxSubsteps = 100000;
+
 struct StudySettings {
   std::string name;
   std::string description;

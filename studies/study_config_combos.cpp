@@ -208,12 +208,13 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     };
     t.q_param = param(q_tuned, "q", q_shape);
     t.r_param = param(r_tuned, "r", r_shape);
-    auto integer = [&](const std::string& key, long fallback, long min_value) {
+    auto integer = [&](const std::string& key, int fallback, int min_value, int max_value) {
       if (!noise.Has(key)) return fallback;
-      return Checked(*noise.Get(key), err,
-                     [&](const std::string& t) { return ParseInteger(t, key, min_value); });
+      return Checked(*noise.Get(key), err, [&](const std::string& t) {
+        return ParseCount(t, key, min_value, max_value);
+      });
     };
-    combo.tune_datasets = int(integer("tune-datasets", 3, 1));
+    combo.tune_datasets = integer("tune-datasets", 3, 1, 10000);
     if (sc.recorded) {
       // The tuning runs are the scenario's tune-data files.
       const std::string key = q_tuned ? "q" : r_tuned ? "r" : "params";
@@ -224,9 +225,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
         noise.Fail(key, "[" + sc.section + "] has no tune-data files to fit on");
       combo.tune_datasets = int(sc.tune_runs.size());
     }
-    t.starts = int(integer("tune-starts", 1, 1));
+    t.starts = integer("tune-starts", 1, 1, 10000);
     t.estimate = estimate;
-    t.burn_in = int(integer("tune-burn-in", 0, 0));
+    t.burn_in = integer("tune-burn-in", 0, 0, kMaxSteps);
     t.compute_std_errors = true;
     std::string error;
     if (!t.IsValid(&error)) noise.FailSection(error);

@@ -82,7 +82,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
     if (!v.Has("steps")) v.FailSection("'steps' is required");
     sc.steps = Checked(*get("steps"), err,
-                       [](const std::string& t) { return int(ParseInteger(t, "steps", 1)); });
+                       [](const std::string& t) { return ParseCount(t, "steps", 1, kMaxSteps); });
     truth.t_end = sc.steps * truth.dt;
   }
 
@@ -114,7 +114,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
                       [](const std::string& t) { return ParseNumber(t, "truth-atol"); });
   if (v.Has("truth-substeps"))
     tr.substeps = Checked(*get("truth-substeps"), err, [](const std::string& t) {
-      return int(ParseInteger(t, "truth-substeps", 1));
+      return ParseCount(t, "truth-substeps", 1, kMaxSubsteps);
     });
   if (v.Has("truth-max-steps"))
     tr.max_steps = Checked(*get("truth-max-steps"), err, [](const std::string& t) {

@@ -129,6 +129,14 @@ long ParseInteger(const std::string& text, const std::string& what, long min_val
   return long(v);
 }
 
+int ParseCount(const std::string& text, const std::string& what, int min_value, int max_value) {
+  const long v = ParseInteger(text, what, min_value);
+  if (v > max_value)
+    throw InputError(what + ": must be in [" + std::to_string(min_value) + ", " +
+                     std::to_string(max_value) + "], got " + text);
+  return int(v);
+}
+
 bool ParseBool(const std::string& text, const std::string& what) {
   if (text == "true" || text == "yes" || text == "1") return true;
   if (text == "false" || text == "no" || text == "0") return false;

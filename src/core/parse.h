@@ -29,6 +29,10 @@ void RequireNonNegative(const std::vector<double>& v, const std::string& option)
 // An integer >= min_value written as a number ("100", "1e3"); throws
 // InputError("<what>: ...") otherwise.
 long ParseInteger(const std::string& text, const std::string& what, long min_value);
+// A count (runs, steps, particles, ...) in [min_value, max_value]: the
+// range is explicit so that nothing wraps when it becomes an int; throws
+// InputError("<what>: must be in [min, max], got <text>") otherwise.
+int ParseCount(const std::string& text, const std::string& what, int min_value, int max_value);
 // true | yes | 1, false | no | 0; throws InputError("<what>: ...") otherwise.
 bool ParseBool(const std::string& text, const std::string& what);
 

@@ -9,6 +9,10 @@
 
 namespace estlab {
 
+// Particles of one filter: 1e7 of a 4-state model already hold about 1 GB
+// (states, propagated states, weights).
+constexpr int kMaxParticles = 10000000;
+
 bool EkfOptions::IsValid(std::string* error) const {
   if (iterations < 1 || iterations > 100) {
     if (error != nullptr)
@@ -70,8 +74,9 @@ bool ParticleOptions::IsValid(std::string* error) const {
     if (error != nullptr) *error = what;
     return false;
   };
-  if (num_particles < 1)
-    return fail("particles: must be >= 1, got " + std::to_string(num_particles));
+  if (num_particles < 1 || num_particles > kMaxParticles)
+    return fail("particles: must be in [1, " + std::to_string(kMaxParticles) + "], got " +
+                std::to_string(num_particles));
   if (!(ess_threshold >= 0.0 && ess_threshold <= 1.0))
     return fail("ess-threshold: must be in [0, 1], got " + FormatNumber(ess_threshold));
   return true;

@@ -92,6 +92,14 @@ bool SigmaPointOptions::IsValidFor(int n, std::string* error) const {
   if (rule == SigmaRule::kUnscented && !(n + kappa > 0))
     return fail("kappa: the unscented rule needs n + kappa > 0, got n = " + std::to_string(n) +
                 ", kappa = " + FormatNumber(kappa));
+  // The unscented points lie alpha sqrt(n + kappa) standard deviations from
+  // the mean; beyond 1000 their weights cancel to rounding and the estimate
+  // stops moving.
+  if (rule == SigmaRule::kUnscented && !(alpha * std::sqrt(n + kappa) <= 1000.0))
+    return fail("alpha, kappa: the unscented points would lie alpha sqrt(n + kappa) = " +
+                FormatNumber(alpha * std::sqrt(n + kappa)) +
+                " standard deviations from the mean; at most 1000");
+  if (!(std::abs(beta) <= 1e6)) return fail("beta: must be in [-1e6, 1e6], got " + FormatNumber(beta));
   if (NumSigmaPoints(n, *this) > kMaxSigmaPoints)
     return fail("gh-order: Gauss-Hermite order " + std::to_string(gh_order) + " in " +
                 std::to_string(n) + " dimensions needs more than " +

@@ -4,6 +4,10 @@
 
 namespace estlab {
 
+// Fixed-step substeps per step: more is an hour of arithmetic per row, a
+// typo, not a setting.
+constexpr int kMaxSubsteps = 100000;
+
 Integrator ParseIntegrator(const std::string& name) {
   if (name == "euler") return Integrator::kEuler;
   if (name == "semi-implicit-euler") return Integrator::kSemiImplicitEuler;
@@ -46,7 +50,9 @@ bool TransitionOptions::IsValid(std::string* error) const {
     if (error != nullptr) *error = what;
     return false;
   };
-  if (substeps < 1) return fail("substeps: must be >= 1, got " + std::to_string(substeps));
+  if (substeps < 1 || substeps > kMaxSubsteps)
+    return fail("substeps: must be in [1, " + std::to_string(kMaxSubsteps) + "], got " +
+                std::to_string(substeps));
   if (!(std::isfinite(rtol) && rtol > 0)) return fail("rtol: must be > 0 and finite");
   if (!(std::isfinite(atol) && atol > 0)) return fail("atol: must be > 0 and finite");
   if (max_steps < 1) return fail("max-steps: must be >= 1");

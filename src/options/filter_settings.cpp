@@ -116,6 +116,9 @@ class Reader {
   long Integer(const std::string& key, long min_value) const {
     return ForKey(key, [&] { return ParseInteger(s_.Get(key), key, min_value); });
   }
+  int Count(const std::string& key, int min_value, int max_value) const {
+    return ForKey(key, [&] { return ParseCount(s_.Get(key), key, min_value, max_value); });
+  }
   std::vector<std::pair<std::string, double>> Assignments(const std::string& key) const {
     return ForKey(key, [&] { return ParseAssignments(s_.GetAll(key), key); });
   }
@@ -150,7 +153,7 @@ void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions*
                       : ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
   const std::string error = CheckIntegratorForModel(t->integrator, model.discrete_time, model.name);
   if (!error.empty()) throw KeyError("integrator", error);
-  t->substeps = int(r.Integer("substeps", 0));
+  t->substeps = r.Count("substeps", 0, 100000);
   const std::string method = r.Text("method");
   if (method == "bdf")
     t->method = CvodesMethod::kBdf;
@@ -215,7 +218,7 @@ void ReadAdapt(const Reader& r, AdaptSpec* adapt) {
   adapt->adapt_q = what.find('q') != std::string::npos;
   adapt->adapt_r = what.find('r') != std::string::npos;
   adapt->forgetting = r.Number("forgetting");
-  adapt->window = int(r.Integer("window", 0));
+  adapt->window = r.Count("window", 0, 100000000);
 }
 
 // The options of every kind from the settings. Each is checked with its
@@ -230,19 +233,19 @@ struct KindSettings {
 
 KindSettings ReadKindSettings(const Reader& r, const std::string& filter_name) {
   KindSettings k;
-  k.ekf.iterations = int(r.Integer("iterations", 0));
+  k.ekf.iterations = r.Count("iterations", 0, 100000);
   if (filter_name == "iekf" && !r.Given("iterations")) k.ekf.iterations = 3;
   k.sigma.alpha = r.Number("alpha");
   k.sigma.beta = r.Number("beta");
   k.sigma.kappa = r.Number("kappa");
-  k.sigma.gh_order = int(r.Integer("gh-order", 0));
+  k.sigma.gh_order = r.Count("gh-order", 0, 100000);
   const std::string upd = r.Text("sigma-update");
   if (upd != "propagate" && upd != "redraw")
     throw KeyError("sigma-update", "expected propagate or redraw, got '" + upd + "'");
   k.sigma.update =
       upd == "redraw" ? SigmaPointOptions::Update::kRedraw : SigmaPointOptions::Update::kPropagate;
   k.sigma.jitter = r.Number("jitter");
-  k.pf.num_particles = int(r.Integer("particles", 0));
+  k.pf.num_particles = r.Count("particles", 1, 10000000);  // ParticleOptions::IsValid's range
   const std::string resample = r.Text("resample");
   k.pf.resample = ForKey("resample", [&] { return ParseResampleScheme(resample); });
   k.pf.ess_threshold = r.Number("ess-threshold");

@@ -90,7 +90,7 @@ TEST(FilterSettings, ErrorsNameTheKey) {
       {"alpha", "-1", "alpha", "must be > 0 and finite, got -1"},
       {"alpha", "abc", "alpha", "'abc' is not a number"},
       {"iterations", "101", "iterations", "must be in [1, 100], got 101"},
-      {"substeps", "0", "substeps", "must be >= 1, got 0"},
+      {"substeps", "0", "substeps", "must be in [1, 100000], got 0"},
       {"sigma-update", "sideways", "sigma-update", "expected propagate or redraw"},
       {"r-diag", "0.01,0.02", "r-diag", "expected 1 values"},
       {"q-diag", "-1,1", "q-diag", "Q is not positive semi-definite"},

@@ -120,6 +120,17 @@ TEST(StudyConfig, ErrorsNameFileLineAndKey) {
       {"measurement = sin", "measurement = cos",
        "s.ini:16: [scenario.pend] measurement: unknown measurement 'cos'"},
       {"seed = 7", "seed = 7\nseed = 8", "s.ini:4: key 'seed' given twice in [study]"},
+      // Issue 15 item 4: counts beyond 32 bits used to wrap (4294967297 ran 1).
+      {"runs = 2", "runs = 4294967297",
+       "s.ini:4: [study] runs: must be in [1, 100000000], got 4294967297"},
+      {"runs = 2", "runs = 3000000000",
+       "s.ini:4: [study] runs: must be in [1, 100000000], got 3000000000"},
+      {"steps = 25", "steps = 4294967696",
+       "s.ini:13: [scenario.pend] steps: must be in [1, 100000000], got 4294967696"},
+      {"keep-runs = 0,2", "keep-runs = 0,4294967296",
+       "s.ini:5: [study] keep-runs: must be in [0, 99999999], got 4294967296"},
+      {"particles = 100", "particles = 1000000000",
+       "s.ini:32: [filter.pf] particles: must be in [1, 10000000], got 1000000000"},
   };
   for (const Case& c : cases) {
     const std::string message = ParseError(Replace(good, c.from, c.to));
