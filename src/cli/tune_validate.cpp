@@ -76,6 +76,14 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm));
   CheckPriorTime(spec, data);
+  for (size_t j = 0; j < meas.outputs.size(); ++j) {  // as the training files (tuner.h)
+    bool any = false;
+    for (size_t k = 0; k < data.t.size() && !any; ++k)
+      any = std::isfinite(data.z[k * meas.outputs.size() + j]);
+    if (!any)
+      throw InputError(path + ": measurement column z_" + meas.outputs[j] +
+                       " has no value (all missing)");
+  }
   v.initial = RunOn(model, spec, data, meas.outputs, burn_in, horizon);
   v.tuned = RunOn(model, tuned, data, meas.outputs, burn_in, horizon);
 

@@ -124,6 +124,13 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
       if (r.status != FilterStatus::kOk)
         return fail(k, std::string("update failed: ") + FilterStatusName(r.status) +
                            (r.message.empty() ? "" : " - " + r.message));
+      // A finite but absurd measurement (1e308) can make the statistics
+      // overflow while the filter itself reports success: that is a
+      // divergence too, not a result.
+      if (!r.innovation.allFinite() || !std::isfinite(r.nis) || !std::isfinite(r.log_likelihood))
+        return fail(k, "the innovation statistics are not finite (NIS " + FormatNumber(r.nis) +
+                           ", log-likelihood " + FormatNumber(r.log_likelihood) +
+                           "): a measurement far outside the filter's range");
       ++s.updates;
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
