@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "src/core/types.h"
+#include "src/io/folder_lock.h"
 #include "src/io/output_file.h"
 #include "studies/study_report.h"
 #include "studies/study_runner.h"
@@ -545,7 +546,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
 
 void MergeStudies(const std::string& out, const std::vector<std::string>& shard_dirs) {
   if (shard_dirs.empty()) throw InputError("merge: no shard folders given");
-  if (fs::exists(out) && !(fs::is_directory(out) && fs::is_empty(out)))
+  if (fs::exists(out) && !(fs::is_directory(out) && FolderIsEmptyButLock(out)))
     throw InputError("merge: '" + out + "' exists and is not an empty folder");
   std::vector<StudyState> states(shard_dirs.size());
   for (size_t i = 0; i < shard_dirs.size(); ++i) {
@@ -581,6 +582,9 @@ void MergeStudies(const std::string& out, const std::vector<std::string>& shard_
                      " missing");
   }
   fs::create_directories(out);
+  const FolderLock lock(out);  // a second merge into OUT fails here
+  if (!FolderIsEmptyButLock(out))
+    throw InputError("merge: '" + out + "' exists and is not an empty folder");
   std::vector<std::vector<std::string>> runs, steps, timing;
   double wall = 0.0;
   for (size_t i = 0; i < shard_dirs.size(); ++i) {

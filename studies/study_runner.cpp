@@ -27,6 +27,7 @@
 #include "estlab_version.h"
 #include "src/core/random.h"
 #include "src/core/types.h"
+#include "src/io/folder_lock.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "studies/study_metrics.h"
@@ -558,7 +559,12 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   const int runs = options.runs > 0 ? options.runs : config.study.runs;
   const int jobs = options.jobs > 0 ? options.jobs : config.study.jobs;
 
-  // The folder: new, or results of this very study and shard to resume.
+  // The folder: new, or results of this very study and shard to resume,
+  // locked for this process (a second one on the same --out fails here).
+  if (fs::exists(dir) && !fs::is_directory(dir))
+    throw InputError("'" + dir + "' exists and is not a folder");
+  fs::create_directories(dir);
+  const FolderLock lock(dir);
   StudyState state;
   const bool resuming = ReadStudyState(dir, &state);
   if (resuming) {
@@ -569,10 +575,9 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
       throw InputError("'" + dir + "' holds shard " + std::to_string(state.shard) + "/" +
                        std::to_string(state.shards) + ", not " + std::to_string(options.shard) +
                        "/" + std::to_string(options.shards));
-  } else if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir))) {
+  } else if (!FolderIsEmptyButLock(dir)) {
     throw InputError("'" + dir + "' exists and is not a study results folder (no study.state)");
   }
-  fs::create_directories(dir);
   if (!resuming) WriteTextFile(dir + "/config.ini", config.text);
   state.config_hash = ConfigHash(config.text);
   state.runs = runs;

@@ -262,5 +262,38 @@ TEST(StudyCliSummary, ConsolePrintsTheNumbersOfSummaryCsv) {
   EXPECT_GE(compared, 6) << r.out;
 }
 
+// Issue 15 item 3: a second study on the same --out while the first runs
+// used to interleave both into corrupt files. Now it fails at once naming the
+// first's PID, writes nothing, and the first finishes intact.
+TEST_F(StudyCli, SecondProcessOnTheSameFolderIsRefused) {
+  WriteText(dir_.File("s.ini"), TinyStudy(100, 1000));
+  RunResult first;
+  std::thread t([&] { first = RunEstlab("study s.ini --out out --jobs 1 --quiet", dir_.path()); });
+  // Wait until the first holds the lock (its PID is in out/.lock).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < deadline &&
+         !(dir_.Exists("out/.lock") && !ReadFile(dir_.File("out/.lock")).empty()))
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const std::string pid = ReadFile(dir_.File("out/.lock"));
+  const auto second = RunEstlab("study s.ini --out out --jobs 1 --quiet", dir_.path());
+  const bool first_still_running = !dir_.Exists("out/summary.csv");
+  t.join();
+  ASSERT_TRUE(first_still_running) << "the first study finished before the second started";
+  EXPECT_EQ(second.exit_code, 2) << second.err;
+  EXPECT_NE(second.err.find("results folder 'out' is in use by another estlab process (PID " +
+                            pid + ")"),
+            std::string::npos)
+      << second.err;
+  EXPECT_EQ(first.exit_code, 0) << first.err;
+  const std::string runs = RunsCsv(dir_, "out");
+  const size_t rows = SplitLines(runs).size() - 1;  // runs x filter/noise combinations
+  EXPECT_GT(rows, 0u);
+  EXPECT_EQ(rows % 100, 0u) << rows;
+  // A resume afterwards takes the lock again and finds the study complete.
+  const auto again = RunEstlab("study s.ini --out out --jobs 1 --quiet", dir_.path());
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(RunsCsv(dir_, "out"), runs);
+}
+
 }  // namespace
 }  // namespace estlab::testing
