@@ -37,8 +37,9 @@ std::string TwoLogSentence(const Eigen::VectorXd& v, int i, int j, const std::ve
   const double value = std::exp(log_value);
   const double se_log = std::sqrt(std::max(0.0, w.dot(cov * w)));
   const std::string combo = plain[i] + (e < 0 ? "/" : "*") + Power(plain[j], e);
-  return plain[i] + " and " + plain[j] + " are not separately identifiable: the data pin down only " +
-         combo + " = " + FormatNumber(value) + " (SE " + FormatNumber(value * se_log) +
+  return plain[i] + " and " + plain[j] +
+         " are not separately identifiable: the data pin down only " + combo + " = " +
+         FormatNumber(value) + " (SE " + FormatNumber(value * se_log) +
          "); fix one of them (--param) to estimate the other";
 }
 
@@ -56,8 +57,7 @@ std::string DirectionText(const Eigen::VectorXd& v, const std::vector<int>& invo
 }  // namespace
 
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
-                           const std::vector<std::string>& names,
-                           const std::vector<bool>& is_log) {
+                           const std::vector<std::string>& names, const std::vector<bool>& is_log) {
   const int k = int(H.rows());
   FisherReport r;
   r.std_errors.assign(k, kInf);
@@ -111,11 +111,12 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
       }
     }
     if (lambda(j) < -kFlatRatio * top) {
-      r.sentences.push_back("the NLL curves downwards along " + DirectionText(v, involved, names) +
-                            " (eigenvalue " + FormatNumber(lambda(j)) +
-                            "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
-                            "valley); fix one of these parameters or restart from here, no "
-                            "standard errors for them");
+      r.sentences.push_back(
+          "the NLL curves downwards along " + DirectionText(v, involved, names) + " (eigenvalue " +
+          FormatNumber(lambda(j)) +
+          "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
+          "valley); fix one of these parameters or restart from here, no "
+          "standard errors for them");
     } else if (involved.size() == 1) {
       r.sentences.push_back("the data do not determine " + plain[involved[0]] +
                             ": the NLL is flat along it (no standard error)");
@@ -126,8 +127,7 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
       for (size_t a = 0; a < involved.size(); ++a)
         list += (a ? (a + 1 == involved.size() ? " and " : ", ") : "") + plain[involved[a]];
       r.sentences.push_back(list + " are not separately identifiable: the NLL is flat along " +
-                            DirectionText(v, involved, names) +
-                            " (no standard errors for them)");
+                            DirectionText(v, involved, names) + " (no standard errors for them)");
     }
   }
   cov = scale.asDiagonal() * cov * scale.asDiagonal();

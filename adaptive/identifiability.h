@@ -33,7 +33,7 @@ struct FisherReport {
   std::vector<double> correlation;  // k x k row-major, NaN where not identifiable
   std::vector<double> eigenvalues;  // of H, ascending
   std::vector<std::string> sentences;
-  bool positive_definite = false;   // no flat or negative direction
+  bool positive_definite = false;  // no flat or negative direction
 };
 
 // Relative eigenvalue below which a direction of H counts as flat.

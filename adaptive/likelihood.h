@@ -63,9 +63,8 @@
 #include <vector>
 
 #include "adaptive/likelihood_setup.h"
-#include "adaptive/physical_params.h"
-#include "src/run/first_sample.h"
 #include "adaptive/noise_param.h"
+#include "adaptive/physical_params.h"
 #include "adaptive/tuner.h"
 #include "models/model_traits.h"
 #include "src/filters/ekf_step.h"
@@ -79,6 +78,7 @@
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
 #include "src/run/filter_spec.h"
+#include "src/run/first_sample.h"
 #include "src/run/step_loop.h"
 
 namespace estlab {
@@ -471,9 +471,8 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
       *why = "Cholesky of P- failed (not positive definite)";
       return false;
     }
-    status =
-        SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                    &b->measurement_points, b->x, b->P, z, R, p, &u, why);
+    status = SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
+                                         &b->measurement_points, b->x, b->P, z, R, p, &u, why);
   } else {
     status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, p, iterations_, &u, why);
   }

@@ -75,9 +75,7 @@ class PhysicalParams {
     return out;
   }
   // The natural-scale value of theta_j.
-  double Natural(int j, double theta_j) const {
-    return is_log_[j] ? std::exp(theta_j) : theta_j;
-  }
+  double Natural(int j, double theta_j) const { return is_log_[j] ? std::exp(theta_j) : theta_j; }
 
   // Bounds of the slice on the theta scale: the user's (natural scale,
   // mapped), else >= 0 -> [0, inf) and log p -> initial +- bound_width.
@@ -153,8 +151,7 @@ class PhysicalParams {
                        FormatNumber(v));
     auto check_bound = [&](double b, const char* which) {
       if (std::isnan(b)) return;
-      if (!std::isfinite(b) || (log && !(b > 0)) ||
-          (c == Constraint::kNonNegative && b < 0))
+      if (!std::isfinite(b) || (log && !(b > 0)) || (c == Constraint::kNonNegative && b < 0))
         throw InputError("--param-bounds: the " + std::string(which) + " bound of " + e.name +
                          " must be finite and " + ConstraintText(c) + ", got " + FormatNumber(b));
     };
@@ -166,8 +163,8 @@ class PhysicalParams {
     if ((!std::isnan(e.lower) && v < e.lower) || (!std::isnan(e.upper) && v > e.upper))
       throw InputError("--param-bounds: the initial " + e.name + " = " + FormatNumber(v) +
                        " is outside its bounds");
-    if (e.has_prior && !(e.prior_sd > 0 && std::isfinite(e.prior_sd) &&
-                         std::isfinite(e.prior_mean)))
+    if (e.has_prior &&
+        !(e.prior_sd > 0 && std::isfinite(e.prior_sd) && std::isfinite(e.prior_mean)))
       throw InputError("--param-prior: " + e.name + " needs a finite mean and sd > 0");
     index_.push_back(found);
     is_log_.push_back(log);

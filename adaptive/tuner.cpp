@@ -102,8 +102,9 @@ bool IsTunable(const FilterSpec& spec, const TunerOptions& options, int state_di
   if (!spec.adapt.rule.empty())
     return fail("the tuner needs a filter without online adaptation (--adapt)");
   if (!options.estimate.empty() && spec.kind() == FilterKind::kKf)
-    return fail("--estimate-param needs the ekf, iekf or a sigma-point filter: the kf "
-                "linearises the model once, at the nominal parameters");
+    return fail(
+        "--estimate-param needs the ekf, iekf or a sigma-point filter: the kf "
+        "linearises the model once, at the nominal parameters");
   return true;
 }
 

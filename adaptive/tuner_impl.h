@@ -99,9 +99,7 @@ class Objective {
   }
 
   // (m + 1) per update, then one per prior of a physical parameter.
-  long NumResiduals() const {
-    return lik_.NumTerms() * (kM + 1) + lik_.physical().NumPriors();
-  }
+  long NumResiduals() const { return lik_.NumTerms() * (kM + 1) + lik_.physical().NumPriors(); }
 
   // The least-squares residuals; jacobian (row-major NumResiduals x K) may be
   // null.
@@ -513,7 +511,8 @@ void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions
   if (!phys.empty()) {  // every parameter, defaults filled in
     const typename Model::Params nominal = ParamsFromVector<Model>(result->tuned_spec.params);
     result->tuned_spec.params.clear();
-    for (const auto& spec : Model::kParams) result->tuned_spec.params.push_back(nominal.*spec.member);
+    for (const auto& spec : Model::kParams)
+      result->tuned_spec.params.push_back(nominal.*spec.member);
   }
   for (int j = 0; j < phys.NumParams(); ++j) {
     const int i = first + j;

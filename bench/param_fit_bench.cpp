@@ -36,9 +36,9 @@ std::vector<FilterData> Recording() {
   std::vector<FilterData> data;
   for (int i = 1; i <= 4; ++i)
     data.push_back(cli::LoadFilterData(std::string(ESTLAB_SOURCE_DIR) +
-                                      "/examples/data/multiarm/single/train_" +
-                                      std::to_string(i) + ".csv",
-                                  model, meas, columns, false));
+                                           "/examples/data/multiarm/single/train_" +
+                                           std::to_string(i) + ".csv",
+                                       model, meas, columns, false));
   return data;
 }
 

@@ -39,9 +39,10 @@ namespace estlab {
 inline constexpr std::size_t kMaxEstimableParams = 16;
 
 template <class M>
-concept EstimableParams =
-    requires { typename M::template ParamsT<double>; } &&
-    std::same_as<typename M::template ParamsT<double>, typename M::Params> &&
+concept EstimableParams = requires {
+  typename M::template ParamsT<double>;
+}
+&&std::same_as<typename M::template ParamsT<double>, typename M::Params> &&
     sizeof(typename M::Params) == M::kParams.size() * sizeof(double) &&
     M::kParams.size() <= kMaxEstimableParams;
 
@@ -60,11 +61,11 @@ bool ParamOrderMatches() {
 
 // ParamsT<S> from its field values in declaration order.
 template <class Model, class S>
-typename Model::template ParamsT<S> MakeParams(
-    const std::array<S, Model::kParams.size()>& values) {
+typename Model::template ParamsT<S> MakeParams(const std::array<S, Model::kParams.size()>& values) {
   return [&]<std::size_t... I>(std::index_sequence<I...>) {
     return typename Model::template ParamsT<S>{values[I]...};
-  }(std::make_index_sequence<Model::kParams.size()>());
+  }
+  (std::make_index_sequence<Model::kParams.size()>());
 }
 
 namespace model_params_internal {
@@ -72,8 +73,8 @@ namespace model_params_internal {
 // The fields of an aggregate of N members of one type, in declaration order.
 template <std::size_t N, class P>
 auto Fields(const P& p) {
-#define ESTLAB_FIELDS(...)           \
-  const auto& [__VA_ARGS__] = p;     \
+#define ESTLAB_FIELDS(...)       \
+  const auto& [__VA_ARGS__] = p; \
   return std::array{__VA_ARGS__};
   if constexpr (N == 1) {
     ESTLAB_FIELDS(a)

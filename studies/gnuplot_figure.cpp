@@ -55,9 +55,9 @@ bool RenderFigure(const std::string& script, const std::string& gnuplot, std::st
   const std::filesystem::path path(script);
   const std::string folder = path.parent_path().empty() ? "." : path.parent_path().string();
   std::string log;
-  const int status = RunCommand("cd " + ShellQuote(folder) + " && " + gnuplot + " " +
-                                    ShellQuote(path.filename().string()),
-                                &log);
+  const int status = RunCommand(
+      "cd " + ShellQuote(folder) + " && " + gnuplot + " " + ShellQuote(path.filename().string()),
+      &log);
   if (status == 0) return true;
   *message = "gnuplot failed on " + script + ": " + log;
   return false;

@@ -31,15 +31,16 @@ double EvenStep(const FilterData& d) {
 void CheckRun(const ModelEntry& model, const FilterData& d) {
   if (model.has_input) throw InputError("output-error: models with an input are not supported");
   if (!d.has_truth)
-    throw InputError(d.path + ": output-error and free simulation start each window from the "
-                              "recorded state: the data need a column per state (map them with "
-                              "--column, e.g. theta=angle-pi)");
+    throw InputError(d.path +
+                     ": output-error and free simulation start each window from the "
+                     "recorded state: the data need a column per state (map them with "
+                     "--column, e.g. theta=angle-pi)");
 }
 
 // Appends the free-simulation errors of one run to *e (row-major, outputs
 // fastest); false with *why when a simulation fails.
-bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData& d,
-               double horizon, std::vector<double>* e, long* windows, std::string* why) {
+bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData& d, double horizon,
+               std::vector<double>* e, long* windows, std::string* why) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const int n = int(model.states.size()), m = int(meas.outputs.size());
   const double dt = EvenStep(d);
@@ -56,13 +57,13 @@ bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData
     s.measurement = spec.measurement;
     const SimulationResult r = model.simulate(s);
     if (!r.ok || r.rows.size() < count) {
-      *why = "the simulation from " + d.path + " row " + std::to_string(w) + " (t = " +
-             FormatNumber(d.t[w]) + ") failed: " + r.error;
+      *why = "the simulation from " + d.path + " row " + std::to_string(w) +
+             " (t = " + FormatNumber(d.t[w]) + ") failed: " + r.error;
       return false;
     }
     ++*windows;
     const size_t first_z = r.columns.size() - size_t(m);  // t, states, z_<outputs>
-    for (size_t i = (w == 0 ? 0 : 1); i < count; ++i) {  // window starts counted once
+    for (size_t i = (w == 0 ? 0 : 1); i < count; ++i) {   // window starts counted once
       for (int j = 0; j < m; ++j) {
         const double z = d.z[(w + i) * m + j];
         double err = std::isfinite(z) ? z - r.rows[i][first_z + j] : 0.0;
@@ -165,8 +166,8 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
     for (size_t i = 0; i < model.params.size(); ++i)
       if (model.params[i].name == e.name) found = int(i);
     if (found < 0)
-      throw InputError("--estimate-param: model '" + model.name + "' has no parameter '" +
-                       e.name + "'");
+      throw InputError("--estimate-param: model '" + model.name + "' has no parameter '" + e.name +
+                       "'");
     if (e.has_prior) throw InputError("--param-prior applies to --estimator ml only");
     const Constraint c = model.params[found].constraint;
     const bool log = c == Constraint::kPositive;
@@ -178,8 +179,7 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
     r.param_names.push_back(e.name);
     r.param_initial.push_back(v);
     r.theta_initial.push_back(log ? std::log(v) : v);
-    const double lo = std::isnan(e.lower) ? (c == Constraint::kNonNegative ? 0.0 : -kInf)
-                                          : e.lower;
+    const double lo = std::isnan(e.lower) ? (c == Constraint::kNonNegative ? 0.0 : -kInf) : e.lower;
     const double hi = std::isnan(e.upper) ? kInf : e.upper;
     lower.push_back(log ? (std::isnan(e.lower) ? -kInf : std::log(lo)) : lo);
     upper.push_back(log ? std::log(hi) : hi);
@@ -242,8 +242,7 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
     r.at_bound.push_back(std::abs(theta[j] - lower[j]) <= tol ||
                          std::abs(theta[j] - upper[j]) <= tol);
   }
-  r.wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   return r;
 }
 

@@ -45,7 +45,7 @@ struct OutputErrorOptions {
 
 struct OutputErrorResult {
   bool ok = false;
-  std::string message;      // Ceres' termination, or why it failed
+  std::string message;  // Ceres' termination, or why it failed
   bool converged = false;
   std::vector<std::string> names;  // theta names ("log L", "b")
   std::vector<bool> is_log;
@@ -56,8 +56,8 @@ struct OutputErrorResult {
   std::vector<std::string> identifiability;
   long residuals = 0;  // N, outputs x rows
   long windows = 0;
-  double residual_sd = 0.0;              // sigma
-  std::vector<double> rmse;              // per output, at the fit
+  double residual_sd = 0.0;  // sigma
+  std::vector<double> rmse;  // per output, at the fit
   int iterations = 0;
   double wall_s = 0.0;
   FilterSpec fitted_spec;  // spec with the fitted parameters

@@ -120,8 +120,8 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
     nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
     auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
     nc.role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params") ? "tuned"
-              : text_of("q") == "oracle" && text_of("r") == "oracle" ? "oracle"
-                                                                     : "hand";
+              : text_of("q") == "oracle" && text_of("r") == "oracle"                ? "oracle"
+                                                                                    : "hand";
     if (v.Has("role")) {
       nc.role = v.Get("role")->text;
       if (nc.role != "hand" && nc.role != "tuned" && nc.role != "oracle" && nc.role != "other")

@@ -85,8 +85,9 @@ void ReadRecordedData(const SectionValues& v, ScenarioConfig* sc) {
   sc->data_runs = LoadFiles(v, "data", *sc);
   if (v.Has("tune-data")) sc->tune_runs = LoadFiles(v, "tune-data", *sc);
   if (v.Has("burn-in")) {
-    sc->burn_in = Checked(*v.Get("burn-in"), v.errors(),
-                          [](const std::string& t) { return ParseCount(t, "burn-in", 0, kMaxSteps); });
+    sc->burn_in = Checked(*v.Get("burn-in"), v.errors(), [](const std::string& t) {
+      return ParseCount(t, "burn-in", 0, kMaxSteps);
+    });
     size_t shortest = sc->data_runs.front().t.size();
     for (const FilterData& d : sc->data_runs) shortest = std::min(shortest, d.t.size());
     if (size_t(sc->burn_in) >= shortest)

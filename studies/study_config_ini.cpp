@@ -114,13 +114,27 @@ const std::vector<std::string> kScenarioKeys = [] {
   keys.insert(keys.end(), kRecordedKeys.begin(), kRecordedKeys.end());
   return keys;
 }();
-const std::vector<std::string> kNoiseKeys = {"q",           "q-diag",        "q-white-accel",
-                                             "r",           "r-diag",        "scenarios",
-                                             "filters",     "description",   "role",
-                                             "init-q-diag", "init-q",        "init-q-white-accel",
-                                             "init-r-diag", "init-r",        "q-param",
-                                             "r-param",     "tune-datasets", "tune-starts",
-                                             "tune-burn-in", "params",       "param-bounds",
+const std::vector<std::string> kNoiseKeys = {"q",
+                                             "q-diag",
+                                             "q-white-accel",
+                                             "r",
+                                             "r-diag",
+                                             "scenarios",
+                                             "filters",
+                                             "description",
+                                             "role",
+                                             "init-q-diag",
+                                             "init-q",
+                                             "init-q-white-accel",
+                                             "init-r-diag",
+                                             "init-r",
+                                             "q-param",
+                                             "r-param",
+                                             "tune-datasets",
+                                             "tune-starts",
+                                             "tune-burn-in",
+                                             "params",
+                                             "param-bounds",
                                              "param-prior"};
 
 // ---------------------------------------------------------------------------

@@ -84,7 +84,7 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
     << GnuplotQuote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
-             (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
+                    (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
     << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
     const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
@@ -138,8 +138,9 @@ void ConsistencyFigure(const ScenarioConfig& sc, const std::vector<ComboName>& c
   Figure& cons = *fig;
   auto& c = cons.body();
   c << "  set multiplot layout " << (sc.has_truth ? 2 : 1) << ",1 title "
-    << GnuplotQuote(sc.name + (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
-             " across runs, 95 % bounds dashed")
+    << GnuplotQuote(sc.name +
+                    (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
+                    " across runs, 95 % bounds dashed")
     << "\n"
     << "  set logscale y\n";
   for (int panel = sc.has_truth ? 0 : 1; panel < 2; ++panel) {
@@ -238,15 +239,17 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
   b << "  set multiplot layout " << panels.size() << ",1 title "
-    << GnuplotQuote(sc.name + ": " + what + ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
+    << GnuplotQuote(sc.name + ": " + what +
+                    ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
     << "  set lmargin " << longest + 3 << "\n  unset key\n"
     << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
     << "  set cbrange [0:2]\n  unset colorbox\n";
   for (size_t i = 0; i < panels.size(); ++i)
-    b << "  set xlabel " << GnuplotQuote(panels[i].label) << "\n  plot " << GnuplotQuote(fig.dat_name())
-      << " index " << i << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
+    b << "  set xlabel " << GnuplotQuote(panels[i].label) << "\n  plot "
+      << GnuplotQuote(fig.dat_name()) << " index " << i
+      << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
   const int panel = 22 * int(combos.size()) + 90;
   scripts->push_back(fig.Write(term, 900, panel * int(panels.size()) + 40));
@@ -308,7 +311,7 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
     << GnuplotQuote(sc.name + ", run " + std::to_string(run) +
-             ": filter standard deviation sqrt(P) over time (log scale)")
+                    ": filter standard deviation sqrt(P) over time (log scale)")
     << "\n  set logscale y\n";
   StatePanels(sc, combos, blocks, "sd ", &fig);
   b << "  unset multiplot\n";
@@ -357,7 +360,8 @@ void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::strin
       << "  set xlabel " << GnuplotQuote(key + " (scenario label)")
       << "\n  set xtics rotate by -40\n  set key inside top left\n";
     for (size_t i = 0; i < states.size(); ++i) {
-      b << "  set ylabel " << GnuplotQuote(Label(first.model->name, "RMSE " + states[i])) << "\n  plot ";
+      b << "  set ylabel " << GnuplotQuote(Label(first.model->name, "RMSE " + states[i]))
+        << "\n  plot ";
       for (size_t j = 0; j < combos.size(); ++j) {
         const size_t index = i * combos.size() + j;
         b << (j ? ", \\\n       " : "") << GnuplotQuote(fig.dat_name()) << " index " << index

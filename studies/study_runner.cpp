@@ -332,10 +332,9 @@ std::string TunedParamsText(const TuneResult& r) {
 }
 
 std::vector<std::string> TunedColumns() {
-  return {"scenario", "filter",      "noise",     "status",     "datasets",
-          "updates",  "nll_initial", "nll_tuned", "iterations", "q_param",
-          "r_param",  "qc",          "q",         "r",          "message",
-          "params"};
+  return {"scenario",    "filter",    "noise",      "status",  "datasets", "updates",
+          "nll_initial", "nll_tuned", "iterations", "q_param", "r_param",  "qc",
+          "q",           "r",         "message",    "params"};
 }
 
 // Runs every tuning (in parallel over `jobs` threads, results in a fixed

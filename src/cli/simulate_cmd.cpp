@@ -92,14 +92,17 @@ std::vector<std::pair<std::string, double>> ConfigParams(const std::string& path
     if (text.empty()) continue;
     const size_t eq = text.find('=');
     const std::string where = path + ":" + std::to_string(number);
-    if (eq == std::string::npos) throw InputError(where + ": expected KEY = VALUE, got '" + text + "'");
+    if (eq == std::string::npos)
+      throw InputError(where + ": expected KEY = VALUE, got '" + text + "'");
     const std::string key = Trim(text.substr(0, eq)), value = Trim(text.substr(eq + 1));
     if (key == "param") {
       for (const auto& p : ParseAssignments({value}, where + ": param")) out.push_back(p);
     } else if (key != "q" && key != "q-diag" && key != "q-white-accel" && key != "r" &&
                key != "r-diag") {
-      throw InputError(where + ": 'estlab simulate --config' reads 'param' lines (and skips a "
-                               "tuned.ini's Q and R), not '" + key + "'");
+      throw InputError(where +
+                       ": 'estlab simulate --config' reads 'param' lines (and skips a "
+                       "tuned.ini's Q and R), not '" +
+                       key + "'");
     }
   }
   return out;

@@ -203,8 +203,8 @@ void PrintPhysical(const TuneResult& r) {
     const size_t first = r.names.size() - r.param_names.size();
     for (size_t j = 0; j < r.param_names.size(); ++j) {
       std::cout << "  " << std::left << std::setw(26) << r.param_names[j] << std::right
-                << std::setw(12) << r.param_initial[j] << " " << std::setw(12)
-                << r.param_values[j] << " " << std::setw(10) << r.param_std_errors[j]
+                << std::setw(12) << r.param_initial[j] << " " << std::setw(12) << r.param_values[j]
+                << " " << std::setw(10) << r.param_std_errors[j]
                 << (r.at_bound[first + j] ? "  at a bound" : "") << "\n";
     }
   }
@@ -278,7 +278,8 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     j.Key("r");
     WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
     j.Key("params").BeginObject();
-    for (size_t i = 0; i < r.param_names.size(); ++i) j.Key(r.param_names[i]).Value(r.param_values[i]);
+    for (size_t i = 0; i < r.param_names.size(); ++i)
+      j.Key(r.param_names[i]).Value(r.param_values[i]);
     j.EndObject().EndObject();
     j.Key("std_errors").BeginObject();
     for (size_t i = 0; i < r.param_names.size(); ++i)
@@ -335,7 +336,8 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   return j.str();
 }
 
-void WriteProfileJson(JsonWriter* j, const ProfileResult& p, const std::vector<std::string>& files) {
+void WriteProfileJson(JsonWriter* j, const ProfileResult& p,
+                      const std::vector<std::string>& files) {
   j->BeginObject().Key("name").Value(p.name).Key("values").Value(p.values);
   j->Key("nll").Value(p.nll).Key("status").Value(p.status);
   j->Key("ci95").Value(std::vector<double>{p.ci_lo, p.ci_hi}).Key("files").Value(files);
@@ -406,9 +408,8 @@ int RunTune(const std::vector<std::string>& args) {
       "profile-out", po::value<std::string>(),
       "prefix of the profile's CSV and figure (default profile_NAME)")(
       "validate", po::value<std::vector<std::string>>()->composing(),
-      "validation data CSV (repeatable)")(
-      "true-q-diag", po::value<std::string>(),
-      "validation: true Q diagonal (else <validate>.json)")(
+      "validation data CSV (repeatable)")("true-q-diag", po::value<std::string>(),
+                                          "validation: true Q diagonal (else <validate>.json)")(
       "true-r-diag", po::value<std::string>(),
       "validation: true R diagonal (else <validate>.json)")(
       "out", po::value<std::string>(),
@@ -495,7 +496,8 @@ int RunTune(const std::vector<std::string>& args) {
 
   if (profile_request) {
     bool named = false;
-    for (const EstimatedParam& e : options.estimate) named = named || e.name == profile_request->name;
+    for (const EstimatedParam& e : options.estimate)
+      named = named || e.name == profile_request->name;
     if (!named)
       throw InputError("--profile: '" + profile_request->name + "' is not in --estimate-param");
   }

@@ -7,15 +7,15 @@
 
 namespace estlab::cli {
 
-void PrintOutputError(const ModelEntry& model, const FilterSpec& spec,
-                      const OutputErrorResult& r, double horizon,
-                      const std::vector<Validation>& validations, const std::string& out_path) {
+void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
+                      double horizon, const std::vector<Validation>& validations,
+                      const std::string& out_path) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   std::cout << std::setprecision(6) << "model         " << model.name << ", measurement "
             << spec.measurement << "\nestimator     output-error least squares, free simulation"
             << " over " << horizon << " s windows from the recorded states\ndata          "
-            << r.windows << " windows, " << r.residuals << " residuals\nCeres         "
-            << r.message << " (" << r.iterations << " iterations)\n";
+            << r.windows << " windows, " << r.residuals << " residuals\nCeres         " << r.message
+            << " (" << r.iterations << " iterations)\n";
   std::cout << "\n  model parameter               initial     estimate         SE\n";
   for (size_t j = 0; j < r.param_names.size(); ++j) {
     std::cout << "  " << std::left << std::setw(26) << r.param_names[j] << std::right
@@ -43,7 +43,8 @@ std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
   j.Key("status").Value(r.ok ? (r.converged ? "converged" : "no-convergence") : "failed");
   j.Key("message").Value(r.message);
   j.Key("tuned").BeginObject().Key("params").BeginObject();
-  for (size_t i = 0; i < r.param_names.size(); ++i) j.Key(r.param_names[i]).Value(r.param_values[i]);
+  for (size_t i = 0; i < r.param_names.size(); ++i)
+    j.Key(r.param_names[i]).Value(r.param_values[i]);
   j.EndObject().EndObject();
   j.Key("std_errors").BeginObject();
   for (size_t i = 0; i < r.param_names.size(); ++i)

@@ -13,9 +13,9 @@
 
 namespace estlab::cli {
 
-void PrintOutputError(const ModelEntry& model, const FilterSpec& spec,
-                      const OutputErrorResult& r, double horizon,
-                      const std::vector<Validation>& validations, const std::string& out_path);
+void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
+                      double horizon, const std::vector<Validation>& validations,
+                      const std::string& out_path);
 
 std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
                             const OutputErrorResult& r, double horizon,

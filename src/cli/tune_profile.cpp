@@ -51,8 +51,7 @@ ProfileResult ProfileLikelihood(const ModelEntry& model, const TunerOptions& opt
   int j = -1;
   for (size_t i = 0; i < best.param_names.size(); ++i)
     if (best.param_names[i] == request.name) j = int(i);
-  if (j < 0)
-    throw InputError("--profile: '" + request.name + "' is not in --estimate-param");
+  if (j < 0) throw InputError("--profile: '" + request.name + "' is not in --estimate-param");
   int index = -1;
   for (size_t i = 0; i < model.params.size(); ++i)
     if (model.params[i].name == request.name) index = int(i);
@@ -87,8 +86,7 @@ ProfileResult ProfileLikelihood(const ModelEntry& model, const TunerOptions& opt
     p.values.push_back(v);
     try {
       const TuneResult r = model.tune(fixed, rest, datasets);
-      p.nll.push_back(r.IsSolutionUsable() ? r.nll_tuned
-                                           : std::numeric_limits<double>::infinity());
+      p.nll.push_back(r.IsSolutionUsable() ? r.nll_tuned : std::numeric_limits<double>::infinity());
       p.status.push_back(TuneStatusName(r.status));
     } catch (const InputError& e) {  // e.g. a value outside the parameter's constraint
       p.nll.push_back(std::numeric_limits<double>::infinity());
@@ -136,8 +134,8 @@ std::vector<std::string> WriteProfile(const ProfileResult& p, const std::string&
              << "  set key inside top center\n  set format x '%.6g'\n  set xtics rotate by -30\n"
              << "  set xlabel " << GnuplotQuote(p.name) << "\n"
              << "  set ylabel 'NLL - NLL(optimum)'\n"
-             << "  set arrow from first " << FormatDouble(p.estimate)
-             << ", graph 0 to first " << FormatDouble(p.estimate) << ", graph 1 nohead dt 2\n"
+             << "  set arrow from first " << FormatDouble(p.estimate) << ", graph 0 to first "
+             << FormatDouble(p.estimate) << ", graph 1 nohead dt 2\n"
              << "  plot " << GnuplotQuote(fig.dat_name())
              << " using 1:2 with linespoints pt 7 title 'profile', " << FormatDouble(kHalfChi2)
              << " with lines dt 3 title '95 % (chi2_1 / 2 = 1.92)'\n";

@@ -64,7 +64,8 @@ ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const Filte
   // The burn-in counts updates, as the tuner's; rows without an update are
   // few in recorded data, so skip that many rows.
   ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}};
-  if (data.has_truth && !model.has_input) r.free_rmse = FreeSimulationRmse(model, spec, data, horizon);
+  if (data.has_truth && !model.has_input)
+    r.free_rmse = FreeSimulationRmse(model, spec, data, horizon);
   return r;
 }
 
@@ -142,19 +143,16 @@ std::vector<Validation> ValidateAll(const po::variables_map& vm, const ModelEntr
   return out;
 }
 
-void PrintValidation(const Validation& v, const std::vector<std::string>& outputs,
-                     double horizon) {
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs, double horizon) {
   std::cout << "\nvalidation on " << v.path
             << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
-            << outputs.size() << ")   free-sim RMSE over " << horizon
-            << " s   mean NEES   RMSE\n";
+            << outputs.size() << ")   free-sim RMSE over " << horizon << " s   mean NEES   RMSE\n";
   auto row = [&](const char* name, const ValidationRun& r) {
     const NoTruthMetrics& m = r.metrics;
     std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
-              << m.nll_per_step << "  " << std::setw(9) << m.mean_nis << " ("
-              << m.nis_bounds95[0] << " .. " << m.nis_bounds95[1] << ")  ";
-    for (size_t i = 0; i < m.pred_rmse.size(); ++i)
-      std::cout << (i ? ", " : "") << m.pred_rmse[i];
+              << m.nll_per_step << "  " << std::setw(9) << m.mean_nis << " (" << m.nis_bounds95[0]
+              << " .. " << m.nis_bounds95[1] << ")  ";
+    for (size_t i = 0; i < m.pred_rmse.size(); ++i) std::cout << (i ? ", " : "") << m.pred_rmse[i];
     std::cout << "  ";
     for (size_t i = 0; i < r.free_rmse.size(); ++i) std::cout << (i ? ", " : "") << r.free_rmse[i];
     if (r.free_rmse.empty()) std::cout << "-";

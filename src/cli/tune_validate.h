@@ -47,8 +47,7 @@ std::vector<Validation> ValidateAll(const boost::program_options::variables_map&
                                     const ModelEntry& model, const FilterSpec& spec,
                                     const FilterSpec& tuned, int burn_in, double horizon);
 
-void PrintValidation(const Validation& v, const std::vector<std::string>& outputs,
-                     double horizon);
+void PrintValidation(const Validation& v, const std::vector<std::string>& outputs, double horizon);
 void WriteValidationJson(JsonWriter* j, const Validation& v,
                          const std::vector<std::string>& outputs);
 

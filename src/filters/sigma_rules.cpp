@@ -99,7 +99,8 @@ bool SigmaPointOptions::IsValidFor(int n, std::string* error) const {
     return fail("alpha, kappa: the unscented points would lie alpha sqrt(n + kappa) = " +
                 FormatNumber(alpha * std::sqrt(n + kappa)) +
                 " standard deviations from the mean; at most 1000");
-  if (!(std::abs(beta) <= 1e6)) return fail("beta: must be in [-1e6, 1e6], got " + FormatNumber(beta));
+  if (!(std::abs(beta) <= 1e6))
+    return fail("beta: must be in [-1e6, 1e6], got " + FormatNumber(beta));
   if (NumSigmaPoints(n, *this) > kMaxSigmaPoints)
     return fail("gh-order: Gauss-Hermite order " + std::to_string(gh_order) + " in " +
                 std::to_string(n) + " dimensions needs more than " +

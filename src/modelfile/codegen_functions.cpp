@@ -178,8 +178,9 @@ std::string EvalFunction(const ModelFile& m, const MeasurementDecl& meas, int in
   body.Add("return z;");
   const std::string x_type = "const Vec<T, " + std::to_string(m.states.size()) + ">& ";
   return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + "static " + vec +
-         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " + Param(body.uses_p, "const P& ", "p") +
-         ") {\n" + body.Text(indent + 2) + Spaces(indent) + "}\n";
+         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " +
+         Param(body.uses_p, "const P& ", "p") + ") {\n" + body.Text(indent + 2) + Spaces(indent) +
+         "}\n";
 }
 
 std::string InvariantFunctions(const ModelFile& m, int indent) {

@@ -67,7 +67,8 @@ inline int RhsEvalsPerStep(Integrator scheme) {
 // `substeps` equal steps from t0 to t1.
 template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::kStateDim>& x0,
-                                        double t0, double t1, int substeps, double u, const Prm& p) {
+                                        double t0, double t1, int substeps, double u,
+                                        const Prm& p) {
   const double h = (t1 - t0) / substeps;
   Vec<T, Model::kStateDim> x = x0;
   for (int i = 0; i < substeps; ++i) x = FixedStep<Model, T, Prm>(scheme, x, t0 + i * h, h, u, p);

@@ -21,10 +21,10 @@
 
 #include "models/model_traits.h"
 #include "src/core/white_accel.h"
-#include "src/run/first_sample.h"
 #include "src/filters/filters.h"
 #include "src/filters/noise_adapter.h"
 #include "src/run/filter_spec.h"
+#include "src/run/first_sample.h"
 #include "src/run/step_loop.h"
 
 namespace estlab {

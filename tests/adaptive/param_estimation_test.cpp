@@ -121,9 +121,10 @@ TEST(ParamEstimation, FiftyDatasetsCoverTheTruthAndBeatItsNll) {
     EXPECT_DOUBLE_EQ(r.tuned_spec.params[1], r.param_values[0]);
     EXPECT_DOUBLE_EQ(r.tuned_spec.params[2], r.param_values[1]);
     if (d < 5) {
-      std::printf("  dataset %d: L %.4f +- %.4f  b %.4f +- %.4f  qc %.4f  R %.3g  NLL - true %.3f\n",
-                  d, r.param_values[0], r.param_std_errors[0], r.param_values[1],
-                  r.param_std_errors[1], r.qc, r.r[0], r.nll_tuned - nll_true);
+      std::printf(
+          "  dataset %d: L %.4f +- %.4f  b %.4f +- %.4f  qc %.4f  R %.3g  NLL - true %.3f\n", d,
+          r.param_values[0], r.param_std_errors[0], r.param_values[1], r.param_std_errors[1], r.qc,
+          r.r[0], r.nll_tuned - nll_true);
     }
   }
   for (int i = 0; i < 4; ++i) {
@@ -225,19 +226,22 @@ TEST(ParamEstimationInput, RejectsBadNamesBoundsPriorsAndTheKf) {
   using testing::ErrorText;
   EXPECT_NE(ErrorText([] { ParseEstimatedParams("L,L", "", ""); }).find("'L' is named twice"),
             std::string::npos);
-  EXPECT_NE(ErrorText([] { ParseEstimatedParams("L", "b=0:1", ""); })
-                .find("--param-bounds: 'b' is not in --estimate-param"),
+  EXPECT_NE(ErrorText([] {
+              ParseEstimatedParams("L", "b=0:1", "");
+            }).find("--param-bounds: 'b' is not in --estimate-param"),
             std::string::npos);
   EXPECT_NE(ErrorText([] { ParseEstimatedParams("L", "L=0.1", ""); }).find("got 'L=0.1'"),
             std::string::npos);
   EXPECT_NE(ErrorText([] { ParseEstimatedParams("L", "L=x:1", ""); }).find("'x'"),
             std::string::npos);
-  EXPECT_NE(ErrorText([] { ParseEstimatedParams("L", "", "L=gamma:1:2"); })
-                .find("expected NAME=normal:MEAN:SD, got 'L=gamma:1:2'"),
+  EXPECT_NE(ErrorText([] {
+              ParseEstimatedParams("L", "", "L=gamma:1:2");
+            }).find("expected NAME=normal:MEAN:SD, got 'L=gamma:1:2'"),
             std::string::npos);
   EXPECT_NE(ErrorText([] { ParseEstimatedParams("L", "", "L=normal:1:0"); }).find("sd must be > 0"),
             std::string::npos);
-  const std::vector<EstimatedParam> e = ParseEstimatedParams(" L , b", "b=:5, L=0.1:", "L=normal:0.5:0.1");
+  const std::vector<EstimatedParam> e =
+      ParseEstimatedParams(" L , b", "b=:5, L=0.1:", "L=normal:0.5:0.1");
   ASSERT_EQ(e.size(), 2u);
   EXPECT_TRUE(std::isnan(e[0].upper) && e[0].lower == 0.1 && e[0].has_prior);
   EXPECT_TRUE(std::isnan(e[1].lower) && e[1].upper == 5.0 && !e[1].has_prior);
@@ -246,8 +250,9 @@ TEST(ParamEstimationInput, RejectsBadNamesBoundsPriorsAndTheKf) {
   auto error = [&](FilterSpec spec, TunerOptions options) {
     return ErrorText([&] { InnovationLikelihood<P, P::Angle> lik(spec, options, data); });
   };
-  EXPECT_NE(error(Spec(EkfOptions{}), Options({"len"})).find("has no parameter 'len' (it has g, L, b)"),
-            std::string::npos);
+  EXPECT_NE(
+      error(Spec(EkfOptions{}), Options({"len"})).find("has no parameter 'len' (it has g, L, b)"),
+      std::string::npos);
   EXPECT_NE(error(Spec(KfOptions{}), Options({"L"})).find("needs the ekf"), std::string::npos);
   TunerOptions bounded = Options({"L"});
   bounded.estimate[0].lower = 1.0;  // the initial 0.8 is outside

@@ -4,8 +4,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <boost/program_options.hpp>
 #include <algorithm>
+#include <boost/program_options.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -242,9 +242,9 @@ TEST_F(TuneCli, EstimatesParametersAndWritesThemForFilter) {
                              "--param-bounds b=0:5 --init-q-white-accel 1e-2 --init-r-diag 1e-2 "
                              "--out tuned.ini --json");
   ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
-  for (const char* key : {"\"params\": {\"L\": ", "\"std_errors\": {\"L\": ",
-                          "\"params_initial\": {\"L\": 0.8", "\"identifiability\": []",
-                          "\"correlation\": [1, "}) {
+  for (const char* key :
+       {"\"params\": {\"L\": ", "\"std_errors\": {\"L\": ", "\"params_initial\": {\"L\": 0.8",
+        "\"identifiability\": []", "\"correlation\": [1, "}) {
     EXPECT_NE(r.out.find(key), std::string::npos) << "missing " << key << " in\n" << r.out;
   }
   const std::string ini = Slurp(File("tuned.ini"));
@@ -280,9 +280,9 @@ TEST_F(TuneCli, EstimatesParametersAndWritesThemForFilter) {
   for (const std::string& bad :
        {std::string("--estimate-param len"), std::string("--estimate-param L --param-bounds b=0:1"),
         std::string("--estimate-param L --param-prior L=normal:1:-1")}) {
-    const CmdResult e = Estlab("tune " + filter +
-                               "--data train.csv --init-q-white-accel 1e-2 --init-r-diag 1e-2 " +
-                               bad + " --out bad.ini");
+    const CmdResult e =
+        Estlab("tune " + filter + "--data train.csv --init-q-white-accel 1e-2 --init-r-diag 1e-2 " +
+               bad + " --out bad.ini");
     EXPECT_EQ(e.exit_code, 2) << bad << "\n" << e.err;
     EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;
     EXPECT_FALSE(Exists("bad.ini")) << bad;
@@ -300,7 +300,8 @@ TEST_F(TuneCli, OutputErrorValidationProfileAndFirstSample) {
     const CmdResult s = Estlab(
         "simulate --model pendulum --param L=0.5,b=0.3 --x0 theta=1.2 --t-end 10 --dt 0.01 "
         "--integrator rk4 --process-noise-var 0,1e-4 --measure angle --meas-noise-var 1e-4 "
-        "--seed " + std::to_string(seed) + " --out run" + std::to_string(seed) + ".csv");
+        "--seed " +
+        std::to_string(seed) + " --out run" + std::to_string(seed) + ".csv");
     ASSERT_EQ(s.exit_code, 0) << s.err;
   }
   const std::string base =
@@ -327,15 +328,16 @@ TEST_F(TuneCli, OutputErrorValidationProfileAndFirstSample) {
   std::istringstream rows(csv.substr(csv.find('\n') + 1));
   double best_b = 0.0, best_delta = 1e300;
   for (std::string row; std::getline(rows, row);) {
-    const double b = std::stod(row), delta = std::stod(row.substr(row.find(',', row.find(',') + 1) + 1));
+    const double b = std::stod(row),
+                 delta = std::stod(row.substr(row.find(',', row.find(',') + 1) + 1));
     if (delta < best_delta) best_delta = delta, best_b = b;
   }
   EXPECT_NEAR(best_b, 0.3, 1e-12) << csv;
 
   for (const std::string& bad :
        {base + "--estimator nope", base + "--horizon 0", base + "--profile g",
-        base + "--estimator output-error --profile L",
-        base + "--profile L=2:1", base + "--profile-out p"}) {
+        base + "--estimator output-error --profile L", base + "--profile L=2:1",
+        base + "--profile-out p"}) {
     const CmdResult e = Estlab(bad + " --out bad.ini");
     EXPECT_EQ(e.exit_code, 2) << bad << "\n" << e.err;
     EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;

@@ -300,7 +300,6 @@ TEST(TunerPendulum, RecoversQcOnALongNoisyRun) {
 // ---------------------------------------------------------------------------
 // 3. The AD gradient against central differences of the double NLL.
 
-
 TEST(TunerGradient, JetGradientMatchesCentralDifferences) {
   using P = models::Pendulum;
   const double dt = 0.01;

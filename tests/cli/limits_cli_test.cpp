@@ -26,8 +26,7 @@ TEST(LimitsCli, AbsurdSizesAndSigmaPointParametersExitTwo) {
       {"--filter ukf --beta 1e300", "beta: must be in [-1e6, 1e6], got 1e+300"},
       {"--filter ekf --substeps 1000000000", "substeps: must be in [0, 100000], got 1000000000"},
       {"--filter ekf --substeps 4294967297", "substeps: must be in [0, 100000], got 4294967297"},
-      {"--filter pf --particles 1000000000",
-       "particles: must be in [1, 10000000], got 1000000000"},
+      {"--filter pf --particles 1000000000", "particles: must be in [1, 10000000], got 1000000000"},
       {"--filter ghkf --gh-order 4294967299", "gh-order: must be in [0, 100000], got 4294967299"},
   };
   for (const Case& c : cases) {

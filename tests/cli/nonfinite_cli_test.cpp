@@ -23,8 +23,8 @@ void WriteData(const TempDir& dir, const std::string& name, int bad, const std::
 TEST(NonFiniteCli, AbsurdMeasurementStopsTheFilterWithStepAndTime) {
   TempDir dir;
   WriteData(dir, "d.csv", 10, "1e308");
-  const RunResult r = RunEstlab(std::string(kPendulumFilter) + "--filter ekf --data d.csv --out e.csv",
-                                dir.path());
+  const RunResult r =
+      RunEstlab(std::string(kPendulumFilter) + "--filter ekf --data d.csv --out e.csv", dir.path());
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_NE((r.out + r.err).find("stopped at step 10 (t = 0.125"), std::string::npos)
       << r.out << r.err;

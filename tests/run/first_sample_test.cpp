@@ -17,7 +17,8 @@ using Angle = models::Pendulum::Angle;
 using Sin = models::Pendulum::Sin;
 
 Vec<double, 2> Prior(const FilterSpec& spec, const FilterData& d, bool sin = false) {
-  return sin ? PriorMean<models::Pendulum, Sin>(spec, d) : PriorMean<models::Pendulum, Angle>(spec, d);
+  return sin ? PriorMean<models::Pendulum, Sin>(spec, d)
+             : PriorMean<models::Pendulum, Angle>(spec, d);
 }
 
 TEST(FirstSample, TakesTheFirstFiniteMeasurementOfEachMeasuredState) {

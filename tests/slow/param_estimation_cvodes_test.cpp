@@ -55,8 +55,8 @@ TEST(ParamEstimationCvodes, TenDatasetsCoverTheTruthAndBeatItsNll) {
     ASSERT_TRUE(lik.Nll(truth, &nll_true));
     nll_ok += r.nll_tuned <= nll_true + 1e-6;
     std::printf("  dataset %d: L %.4f +- %.4f  b %.4f +- %.4f  NLL - true %.3f  %.1f s\n", d,
-                r.param_values[0], r.param_std_errors[0], r.param_values[1],
-                r.param_std_errors[1], r.nll_tuned - nll_true, r.wall_s);
+                r.param_values[0], r.param_std_errors[0], r.param_values[1], r.param_std_errors[1],
+                r.nll_tuned - nll_true, r.wall_s);
   }
   for (int i = 0; i < 4; ++i) {
     std::printf("  %-6s within 2 SE: %d / %d\n", kNames[i], within[i], datasets);

@@ -92,8 +92,8 @@ TEST(OutputError, RecoversLengthAndDampingWithinThreeStandardErrors) {
   EXPECT_DOUBLE_EQ(r.fitted_spec.params[1], r.param_values[0]);
   EXPECT_TRUE(r.identifiability.empty());
   std::printf("  L %.6f +- %.2g, b %.5f +- %.2g, residual sd %.3g, %d iterations, %.2f s\n",
-              r.param_values[0], r.param_std_errors[0], r.param_values[1],
-              r.param_std_errors[1], r.residual_sd, r.iterations, r.wall_s);
+              r.param_values[0], r.param_std_errors[0], r.param_values[1], r.param_std_errors[1],
+              r.residual_sd, r.iterations, r.wall_s);
 }
 
 TEST(OutputError, RejectsDataItCannotUse) {
@@ -101,13 +101,12 @@ TEST(OutputError, RejectsDataItCannotUse) {
   const std::vector<EstimatedParam> estimate = {{.name = "L"}};
   FilterData uneven = Pendulum(0.0, 1.0);
   uneven.t[7] += 0.004;
-  std::string e = testing::ErrorText(
-      [&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {uneven}, {}); });
+  std::string e =
+      testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {uneven}, {}); });
   EXPECT_NE(e.find("sim.csv:9: output-error needs evenly sampled data"), std::string::npos) << e;
   FilterData no_states = Pendulum(0.0, 1.0);
   no_states.has_truth = false;
-  e = testing::ErrorText(
-      [&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {no_states}, {}); });
+  e = testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {no_states}, {}); });
   EXPECT_NE(e.find("need a column per state"), std::string::npos) << e;
   e = testing::ErrorText(
       [&] { FitOutputError(model, Spec(0.8, 0.1), {{.name = "len"}}, {Pendulum(0.0, 1.0)}, {}); });

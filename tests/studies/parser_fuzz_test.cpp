@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "../cli/cli_test_util.h"
 #include "src/core/random.h"
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
 #include "src/modelfile/model_file.h"
 #include "studies/study_config.h"
-#include "../cli/cli_test_util.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {
@@ -24,14 +24,56 @@ namespace {
 
 // Tokens worth inserting: the grammar's own punctuation and keywords, and
 // the byte values that broke parsers before (NUL, CR, BOM, huge numbers).
-const std::vector<std::string> kDictionary = {
-    "=",      ",",     "[",       "]",       "\n",     "\r",    "\r\n",       "#",
-    ";",      ":",     "-",       "+",       "*",      "^",     "(",          ")",
-    "nan",    "inf",   "-inf",    "1e308",   "1e-400", "4.9e-324", "4294967297", "-1",
-    "0",      "pi",    "tuned",   "oracle",  "[study]", "[scenario.x]", "[filter.f]",
-    "[noise.n]", "runs =", "steps =", "model =", "kind =", "q-diag =", "params =",
-    "[states]", "[params]", "[rhs]", "[let]", "[measurement m]", "angle", "> 0",
-    std::string(1, '\0'), "\xEF\xBB\xBF", "\xFF\xFE", "  ", "\t"};
+const std::vector<std::string> kDictionary = {"=",
+                                              ",",
+                                              "[",
+                                              "]",
+                                              "\n",
+                                              "\r",
+                                              "\r\n",
+                                              "#",
+                                              ";",
+                                              ":",
+                                              "-",
+                                              "+",
+                                              "*",
+                                              "^",
+                                              "(",
+                                              ")",
+                                              "nan",
+                                              "inf",
+                                              "-inf",
+                                              "1e308",
+                                              "1e-400",
+                                              "4.9e-324",
+                                              "4294967297",
+                                              "-1",
+                                              "0",
+                                              "pi",
+                                              "tuned",
+                                              "oracle",
+                                              "[study]",
+                                              "[scenario.x]",
+                                              "[filter.f]",
+                                              "[noise.n]",
+                                              "runs =",
+                                              "steps =",
+                                              "model =",
+                                              "kind =",
+                                              "q-diag =",
+                                              "params =",
+                                              "[states]",
+                                              "[params]",
+                                              "[rhs]",
+                                              "[let]",
+                                              "[measurement m]",
+                                              "angle",
+                                              "> 0",
+                                              std::string(1, '\0'),
+                                              "\xEF\xBB\xBF",
+                                              "\xFF\xFE",
+                                              "  ",
+                                              "\t"};
 
 std::string Mutate(const std::string& seed, Rng* rng) {
   std::string s = seed;
@@ -83,8 +125,7 @@ long Fuzz(const std::vector<std::string>& seeds, int count, uint64_t seed, Parse
 TEST(ParserFuzz, CsvReader) {
   const std::vector<std::string> seeds = {
       "t,z_theta,theta,omega\n0,0.1,0.1,0\n0.01,0.11,0.1,0.5\n0.02,,0.2,1\n",
-      "# comment\nt,z_sin_theta\n0,0.7\n0.0125,nan\n0.025,0.71\n",
-      "t,u,z_x\n0,1,2\n1,1e-3,-4\n"};
+      "# comment\nt,z_sin_theta\n0,0.7\n0.0125,nan\n0.025,0.71\n", "t,u,z_x\n0,1,2\n1,1e-3,-4\n"};
   EXPECT_EQ(Fuzz(seeds, 20000, 11, [](const std::string& text) { ParseCsv(text, "fuzz.csv"); }),
             60000);
 }
@@ -100,12 +141,12 @@ TEST(ParserFuzz, StudyConfig) {
 }
 
 TEST(ParserFuzz, ModelFile) {
-  const std::string pendulum = ReadFile(std::string(ESTLAB_SOURCE_DIR) +
-                                        "/examples/models/pendulum.model");
-  const std::string dp = ReadFile(std::string(ESTLAB_SOURCE_DIR) +
-                                  "/examples/models/multiarm_double_pendulum.model");
-  const std::string cv = ReadFile(std::string(ESTLAB_SOURCE_DIR) +
-                                  "/examples/models/linear_cv.model");
+  const std::string pendulum =
+      ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/examples/models/pendulum.model");
+  const std::string dp =
+      ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/examples/models/multiarm_double_pendulum.model");
+  const std::string cv =
+      ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/examples/models/linear_cv.model");
   EXPECT_EQ(Fuzz({pendulum, dp, cv}, 10000, 13,
                  [](const std::string& text) { modelfile::ParseModelFile(text, "fuzz.model"); }),
             30000);

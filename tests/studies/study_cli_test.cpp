@@ -280,9 +280,9 @@ TEST_F(StudyCli, SecondProcessOnTheSameFolderIsRefused) {
   t.join();
   ASSERT_TRUE(first_still_running) << "the first study finished before the second started";
   EXPECT_EQ(second.exit_code, 2) << second.err;
-  EXPECT_NE(second.err.find("results folder 'out' is in use by another estlab process (PID " +
-                            pid + ")"),
-            std::string::npos)
+  EXPECT_NE(
+      second.err.find("results folder 'out' is in use by another estlab process (PID " + pid + ")"),
+      std::string::npos)
       << second.err;
   EXPECT_EQ(first.exit_code, 0) << first.err;
   const std::string runs = RunsCsv(dir_, "out");

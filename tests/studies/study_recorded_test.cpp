@@ -4,8 +4,8 @@
 // end (the built-in pendulum on a real single-pendulum piece).
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -259,7 +259,8 @@ TEST_F(RecordedStudy, NoiseSectionFitsModelParametersWithQAndR) {
                                       ": [noise.fit] params: expected 'tuned NAME[,NAME...]', got "
                                       "'L,b'");
   const std::string bad_name = Replace(text, "params = tuned L,b", "params = tuned len,b");
-  EXPECT_NE(ParseError(bad_name).find("[noise.fit] params: model 'pendulum' has no parameter 'len' (it has g, L, b)"),
+  EXPECT_NE(ParseError(bad_name).find(
+                "[noise.fit] params: model 'pendulum' has no parameter 'len' (it has g, L, b)"),
             std::string::npos)
       << ParseError(bad_name);
   const std::string stray = Replace(text, "params = tuned L,b\n", "");
