@@ -277,18 +277,9 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     WriteTuned(&j, r.q_param, r.q_white_accel, r.qc, r.q, n);
     j.Key("r");
     WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
-    j.Key("params").BeginObject();
-    for (size_t i = 0; i < r.param_names.size(); ++i)
-      j.Key(r.param_names[i]).Value(r.param_values[i]);
-    j.EndObject().EndObject();
-    j.Key("std_errors").BeginObject();
-    for (size_t i = 0; i < r.param_names.size(); ++i)
-      j.Key(r.param_names[i]).Value(r.param_std_errors[i]);
-    j.EndObject();
-    j.Key("params_initial").BeginObject();
-    for (size_t i = 0; i < r.param_names.size(); ++i)
-      j.Key(r.param_names[i]).Value(r.param_initial[i]);
-    j.EndObject();
+    j.Key("params").Object(r.param_names, r.param_values).EndObject();
+    j.Key("std_errors").Object(r.param_names, r.param_std_errors);
+    j.Key("params_initial").Object(r.param_names, r.param_initial);
     j.Key("q_matrix");
     WriteMatrix(&j, r.q, n);
     if (r.q_white_accel) j.Key("q_matrix_dt").Value(r.dt_ref);

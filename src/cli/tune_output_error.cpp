@@ -42,23 +42,12 @@ std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
   j.Key("estimator").Value("output-error").Key("horizon").Value(horizon);
   j.Key("status").Value(r.ok ? (r.converged ? "converged" : "no-convergence") : "failed");
   j.Key("message").Value(r.message);
-  j.Key("tuned").BeginObject().Key("params").BeginObject();
-  for (size_t i = 0; i < r.param_names.size(); ++i)
-    j.Key(r.param_names[i]).Value(r.param_values[i]);
-  j.EndObject().EndObject();
-  j.Key("std_errors").BeginObject();
-  for (size_t i = 0; i < r.param_names.size(); ++i)
-    j.Key(r.param_names[i]).Value(r.param_std_errors[i]);
-  j.EndObject();
-  j.Key("params_initial").BeginObject();
-  for (size_t i = 0; i < r.param_names.size(); ++i)
-    j.Key(r.param_names[i]).Value(r.param_initial[i]);
-  j.EndObject();
+  j.Key("tuned").BeginObject().Key("params").Object(r.param_names, r.param_values).EndObject();
+  j.Key("std_errors").Object(r.param_names, r.param_std_errors);
+  j.Key("params_initial").Object(r.param_names, r.param_initial);
   j.Key("parameters").Value(r.names).Key("theta").Value(r.theta);
   j.Key("identifiability").Value(r.identifiability);
-  j.Key("residual_sd").Value(r.residual_sd).Key("fit_rmse").BeginObject();
-  for (size_t i = 0; i < r.rmse.size(); ++i) j.Key(meas.outputs[i]).Value(r.rmse[i]);
-  j.EndObject();
+  j.Key("residual_sd").Value(r.residual_sd).Key("fit_rmse").Object(meas.outputs, r.rmse);
   j.Key("windows").Value(r.windows).Key("residuals").Value(r.residuals);
   j.Key("iterations").Value(r.iterations).Key("wall_s").Value(r.wall_s);
   if (!validations.empty()) {

@@ -179,14 +179,8 @@ void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::stri
   j->Key("nll_per_step").Value(m.nll_per_step);
   j->Key("mean_nis").Value(m.mean_nis);
   j->Key("nis_bounds95").Value(std::vector<double>{m.nis_bounds95[0], m.nis_bounds95[1]});
-  j->Key("pred_rmse").BeginObject();
-  for (size_t i = 0; i < outputs.size(); ++i) j->Key(outputs[i]).Value(m.pred_rmse[i]);
-  j->EndObject();
-  if (!r.free_rmse.empty()) {
-    j->Key("free_rmse").BeginObject();
-    for (size_t i = 0; i < outputs.size(); ++i) j->Key(outputs[i]).Value(r.free_rmse[i]);
-    j->EndObject();
-  }
+  j->Key("pred_rmse").Object(outputs, m.pred_rmse);
+  if (!r.free_rmse.empty()) j->Key("free_rmse").Object(outputs, r.free_rmse);
   if (!s.rmse.empty()) {
     j->Key("rmse").BeginObject();
     for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);

@@ -80,6 +80,12 @@ JsonWriter& JsonWriter::Value(const std::vector<std::string>& v) {
   for (const auto& x : v) Value(x);
   return EndArray();
 }
+JsonWriter& JsonWriter::Object(const std::vector<std::string>& names,
+                               const std::vector<double>& values) {
+  BeginObject();
+  for (size_t i = 0; i < names.size() && i < values.size(); ++i) Key(names[i]).Value(values[i]);
+  return EndObject();
+}
 JsonWriter& JsonWriter::Null() {
   Separate();
   out_ += "null";

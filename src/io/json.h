@@ -28,6 +28,8 @@ class JsonWriter {
   JsonWriter& Value(const char* v) { return Value(std::string(v)); }
   JsonWriter& Value(const std::vector<double>& v);
   JsonWriter& Value(const std::vector<std::string>& v);
+  // {"names[0]": values[0], ...} (the same number of each).
+  JsonWriter& Object(const std::vector<std::string>& names, const std::vector<double>& values);
   JsonWriter& Null();
   const std::string& str() const { return out_; }
 
