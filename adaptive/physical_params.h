@@ -12,7 +12,7 @@
 // as a clear InputError.
 //
 // Usage (inside InnovationLikelihood):
-//   PhysicalParams<Model> phys(options.estimate, spec.params);
+//   PhysicalParams<Model> phys(options.estimate, spec.params, options.bound_width);
 //   auto p = phys.template At<T>(theta + q_count + r_count);  // ParamsT<T>
 #ifndef ESTLAB_ADAPTIVE_PHYSICAL_PARAMS_H_
 #define ESTLAB_ADAPTIVE_PHYSICAL_PARAMS_H_
@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/theta_scale.h"
 #include "adaptive/tuner.h"
 #include "models/model_params.h"
 #include "models/model_traits.h"
@@ -37,7 +38,8 @@ class PhysicalParams {
 
   // Throws InputError for an unknown or repeated name, a model whose
   // parameters are not generic, bad bounds or a bad prior.
-  PhysicalParams(const std::vector<EstimatedParam>& estimate, const std::vector<double>& values)
+  PhysicalParams(const std::vector<EstimatedParam>& estimate, const std::vector<double>& values,
+                 [[maybe_unused]] double bound_width)
       : nominal_(ParamsFromVector<Model>(values)) {
     if (estimate.empty()) return;
     if constexpr (!EstimableParams<Model>) {
@@ -49,7 +51,7 @@ class PhysicalParams {
       if (!ParamOrderMatches<Model>())
         throw InputError(std::string("model '") + Model::kName +
                          "': the fields of Params are not in the order of kParams");
-      for (const EstimatedParam& e : estimate) Add(e);
+      for (const EstimatedParam& e : estimate) Add(e, bound_width);
     }
   }
 
@@ -58,43 +60,27 @@ class PhysicalParams {
   const std::vector<EstimatedParam>& estimated() const { return given_; }
   // Index into Model::kParams of the j-th estimated parameter.
   int ModelIndex(int j) const { return index_[j]; }
-  bool IsLog(int j) const { return is_log_[j]; }
+  bool IsLog(int j) const { return scale_[j].is_log; }
 
   std::vector<double> InitialTheta() const {
     std::vector<double> theta;
-    for (int j = 0; j < NumParams(); ++j) {
-      const double v = Nominal(index_[j]);
-      theta.push_back(is_log_[j] ? std::log(v) : v);
-    }
+    for (const ThetaScale& s : scale_) theta.push_back(s.theta0);
     return theta;
   }
   std::vector<std::string> Names() const {
     std::vector<std::string> out;
     for (int j = 0; j < NumParams(); ++j)
-      out.push_back((is_log_[j] ? "log " : "") + std::string(Model::kParams[index_[j]].name));
+      out.push_back((IsLog(j) ? "log " : "") + std::string(Model::kParams[index_[j]].name));
     return out;
   }
   // The natural-scale value of theta_j.
-  double Natural(int j, double theta_j) const { return is_log_[j] ? std::exp(theta_j) : theta_j; }
+  double Natural(int j, double theta_j) const { return scale_[j].Natural(theta_j); }
 
-  // Bounds of the slice on the theta scale: the user's (natural scale,
-  // mapped), else >= 0 -> [0, inf) and log p -> initial +- bound_width.
-  void Bounds(double bound_width, std::vector<double>* lower, std::vector<double>* upper) const {
-    const std::vector<double> theta0 = InitialTheta();
-    const double inf = std::numeric_limits<double>::infinity();
-    for (int j = 0; j < NumParams(); ++j) {
-      const EstimatedParam& e = given_[j];
-      double lo = -inf, hi = inf;
-      if (is_log_[j]) {
-        lo = std::isnan(e.lower) ? theta0[j] - bound_width : std::log(e.lower);
-        hi = std::isnan(e.upper) ? theta0[j] + bound_width : std::log(e.upper);
-      } else {
-        const bool non_negative = Model::kParams[index_[j]].constraint == Constraint::kNonNegative;
-        lo = std::isnan(e.lower) ? (non_negative ? 0.0 : -inf) : e.lower;
-        hi = std::isnan(e.upper) ? inf : e.upper;
-      }
-      lower->push_back(lo);
-      upper->push_back(hi);
+  // Bounds of the slice on the theta scale (theta_scale.h).
+  void Bounds(std::vector<double>* lower, std::vector<double>* upper) const {
+    for (const ThetaScale& s : scale_) {
+      lower->push_back(s.lower);
+      upper->push_back(s.upper);
     }
   }
 
@@ -105,7 +91,7 @@ class PhysicalParams {
     for (std::size_t i = 0; i < kCount; ++i) v[i] = T(Nominal(int(i)));
     for (int j = 0; j < NumParams(); ++j) {
       using std::exp;
-      v[index_[j]] = is_log_[j] ? exp(theta[j]) : theta[j];
+      v[index_[j]] = IsLog(j) ? exp(theta[j]) : theta[j];
     }
     return MakeParams<Model, T>(v);
   }
@@ -118,7 +104,7 @@ class PhysicalParams {
       const EstimatedParam& e = given_[j];
       if (!e.has_prior) continue;
       using std::exp;
-      const T p = is_log_[j] ? exp(theta[j]) : theta[j];
+      const T p = IsLog(j) ? exp(theta[j]) : theta[j];
       residual((p - e.prior_mean) / e.prior_sd);
     }
   }
@@ -131,49 +117,21 @@ class PhysicalParams {
  private:
   double Nominal(int i) const { return nominal_.*(Model::kParams[i].member); }
 
-  void Add(const EstimatedParam& e) {
-    int found = -1;
-    std::string known;
-    for (std::size_t i = 0; i < kCount; ++i) {
-      known += (i ? ", " : "") + std::string(Model::kParams[i].name);
-      if (e.name == Model::kParams[i].name) found = int(i);
-    }
-    if (found < 0)
-      throw InputError("--estimate-param: model '" + std::string(Model::kName) +
-                       "' has no parameter '" + e.name + "' (it has " + known + ")");
+  void Add(const EstimatedParam& e, double bound_width) {
+    std::vector<std::string> names;
+    for (const auto& spec : Model::kParams) names.push_back(spec.name);
+    const int found = FindEstimatedParam(e.name, names, Model::kName);
     for (int i : index_)
       if (i == found) throw InputError("--estimate-param: '" + e.name + "' is named twice");
-    const Constraint c = Model::kParams[found].constraint;
-    const double v = Nominal(found);
-    const bool log = c == Constraint::kPositive;
-    if (log && !(v > 0))
-      throw InputError("--estimate-param: the initial " + e.name + " must be > 0, got " +
-                       FormatNumber(v));
-    auto check_bound = [&](double b, const char* which) {
-      if (std::isnan(b)) return;
-      if (!std::isfinite(b) || (log && !(b > 0)) || (c == Constraint::kNonNegative && b < 0))
-        throw InputError("--param-bounds: the " + std::string(which) + " bound of " + e.name +
-                         " must be finite and " + ConstraintText(c) + ", got " + FormatNumber(b));
-    };
-    check_bound(e.lower, "lower");
-    check_bound(e.upper, "upper");
-    if (!std::isnan(e.lower) && !std::isnan(e.upper) && !(e.lower < e.upper))
-      throw InputError("--param-bounds: " + e.name + "'s lower bound " + FormatNumber(e.lower) +
-                       " is not below its upper bound " + FormatNumber(e.upper));
-    if ((!std::isnan(e.lower) && v < e.lower) || (!std::isnan(e.upper) && v > e.upper))
-      throw InputError("--param-bounds: the initial " + e.name + " = " + FormatNumber(v) +
-                       " is outside its bounds");
-    if (e.has_prior &&
-        !(e.prior_sd > 0 && std::isfinite(e.prior_sd) && std::isfinite(e.prior_mean)))
-      throw InputError("--param-prior: " + e.name + " needs a finite mean and sd > 0");
+    scale_.push_back(
+        ResolveThetaScale(e, Model::kParams[found].constraint, Nominal(found), bound_width));
     index_.push_back(found);
-    is_log_.push_back(log);
     given_.push_back(e);
   }
 
   typename Model::Params nominal_;
   std::vector<int> index_;
-  std::vector<bool> is_log_;
+  std::vector<ThetaScale> scale_;
   std::vector<EstimatedParam> given_;
 };
 

@@ -562,7 +562,7 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
                                           result.theta_initial.begin() + noise);
     const std::vector<bool> noise_log(result.is_log.begin(), result.is_log.begin() + noise);
     ResolveBounds(options, noise_theta, noise_log, &lower, &upper);
-    lik.physical().Bounds(options.bound_width, &lower, &upper);
+    lik.physical().Bounds(&lower, &upper);
   }
   if (!lik.Nll(result.theta_initial.data(), &result.nll_initial) ||
       !std::isfinite(result.nll_initial))

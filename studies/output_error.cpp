@@ -8,12 +8,12 @@
 #include <limits>
 
 #include "adaptive/identifiability.h"
+#include "adaptive/theta_scale.h"
 #include "src/core/types.h"
 
 namespace estlab {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
@@ -77,11 +77,10 @@ bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData
 
 struct ThetaMap {
   std::vector<int> index;  // into model.params
-  std::vector<bool> is_log;
+  std::vector<ThetaScale> scale;
   FilterSpec At(const FilterSpec& spec, const double* theta) const {
     FilterSpec s = spec;
-    for (size_t j = 0; j < index.size(); ++j)
-      s.params[index[j]] = is_log[j] ? std::exp(theta[j]) : theta[j];
+    for (size_t j = 0; j < index.size(); ++j) s.params[index[j]] = scale[j].Natural(theta[j]);
     return s;
   }
 };
@@ -126,14 +125,14 @@ std::vector<double> Rmse(const std::vector<double>& e, int m) {
 }  // namespace
 
 bool OutputErrorOptions::IsValid(std::string* error) const {
-  if (!(horizon > 0 && std::isfinite(horizon))) {
-    *error = "--horizon must be > 0 s, got " + FormatNumber(horizon);
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
     return false;
-  }
-  if (max_iterations < 1 || !(theta_step > 0)) {
-    *error = "output-error: max iterations >= 1 and a positive step";
-    return false;
-  }
+  };
+  if (!(horizon > 0 && std::isfinite(horizon)))
+    return fail("--horizon must be > 0 s, got " + FormatNumber(horizon));
+  if (max_iterations < 1 || !(theta_step > 0) || !(bound_width > 0))
+    return fail("output-error: max iterations >= 1, a positive step and bound width");
   return true;
 }
 
@@ -161,28 +160,25 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   OutputErrorResult r;
   ThetaMap map;
   std::vector<double> lower, upper;
+  std::vector<std::string> names;
+  for (const ParamDesc& d : model.params) names.push_back(d.name);
   for (const EstimatedParam& e : estimate) {
-    int found = -1;
-    for (size_t i = 0; i < model.params.size(); ++i)
-      if (model.params[i].name == e.name) found = int(i);
-    if (found < 0)
-      throw InputError("--estimate-param: model '" + model.name + "' has no parameter '" + e.name +
-                       "'");
+    const int found = FindEstimatedParam(e.name, names, model.name);
+    for (int i : map.index)
+      if (i == found) throw InputError("--estimate-param: '" + e.name + "' is named twice");
     if (e.has_prior) throw InputError("--param-prior applies to --estimator ml only");
-    const Constraint c = model.params[found].constraint;
-    const bool log = c == Constraint::kPositive;
     const double v = spec.params[found];
+    const ThetaScale s =
+        ResolveThetaScale(e, model.params[found].constraint, v, options.bound_width);
     map.index.push_back(found);
-    map.is_log.push_back(log);
-    r.names.push_back((log ? "log " : "") + e.name);
-    r.is_log.push_back(log);
+    map.scale.push_back(s);
+    r.names.push_back((s.is_log ? "log " : "") + e.name);
+    r.is_log.push_back(s.is_log);
     r.param_names.push_back(e.name);
     r.param_initial.push_back(v);
-    r.theta_initial.push_back(log ? std::log(v) : v);
-    const double lo = std::isnan(e.lower) ? (c == Constraint::kNonNegative ? 0.0 : -kInf) : e.lower;
-    const double hi = std::isnan(e.upper) ? kInf : e.upper;
-    lower.push_back(log ? (std::isnan(e.lower) ? -kInf : std::log(lo)) : lo);
-    upper.push_back(log ? std::log(hi) : hi);
+    r.theta_initial.push_back(s.theta0);
+    lower.push_back(s.lower);
+    upper.push_back(s.upper);
   }
   const int p = int(map.index.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
@@ -235,9 +231,9 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   r.std_errors = report.std_errors;
   r.identifiability = report.sentences;
   for (int j = 0; j < p; ++j) {
-    const double v = map.is_log[j] ? std::exp(theta[j]) : theta[j];
+    const double v = map.scale[j].Natural(theta[j]);
     r.param_values.push_back(v);
-    r.param_std_errors.push_back(map.is_log[j] ? v * r.std_errors[j] : r.std_errors[j]);
+    r.param_std_errors.push_back(map.scale[j].is_log ? v * r.std_errors[j] : r.std_errors[j]);
     const double tol = 1e-6 * std::max(1.0, std::abs(theta[j]));
     r.at_bound.push_back(std::abs(theta[j] - lower[j]) <= tol ||
                          std::abs(theta[j] - upper[j]) <= tol);

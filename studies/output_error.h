@@ -12,7 +12,8 @@
 //
 // Output-error least squares: the estimated parameters minimise
 // 1/2 sum e_kj^2 over every window of every run (Ceres Levenberg-Marquardt;
-// log p for a parameter constrained > 0; the Jacobian by central
+// parameters scaled and bounded as in the ML fit, adaptive/theta_scale.h;
+// the Jacobian by central
 // differences of the simulations, step 1e-6 in theta). Standard errors
 // from sigma^2 (J^T J)^-1, sigma^2 = sum e^2 / (N - p), with the
 // identifiability report of adaptive/identifiability.h on J^T J / sigma^2.
@@ -40,6 +41,7 @@ struct OutputErrorOptions {
   double horizon = 0.5;  // s; the window length
   int max_iterations = 100;
   double theta_step = 1e-6;  // central differences in theta
+  double bound_width = 20.0;  // log parameters within initial +- this (adaptive/theta_scale.h)
   bool IsValid(std::string* error) const;
 };
 

@@ -497,6 +497,7 @@ int RunTune(const std::vector<std::string>& args) {
     OutputErrorOptions oe;
     oe.horizon = horizon;
     oe.max_iterations = options.max_iterations;
+    oe.bound_width = options.bound_width;
     const OutputErrorResult fit = FitOutputError(model, spec, options.estimate, datasets, oe);
     std::vector<Validation> validations;
     if (fit.ok && vm.count("validate"))

@@ -98,7 +98,7 @@ TEST(ParamEstimation, FiftyDatasetsCoverTheTruthAndBeatItsNll) {
   const double truth[4] = {std::log(kQc), std::log(kR), std::log(kL), kB};
   const char* names[4] = {"log qc", "log r", "log L", "b"};
   int within[4] = {0, 0, 0, 0}, nll_ok = 0;
-  double mean_z[4] = {0, 0, 0, 0};
+  double mean_z[4] = {0, 0, 0, 0}, mean_z2[4] = {0, 0, 0, 0};
   const int datasets = 50;
   for (int d = 0; d < datasets; ++d) {
     const std::vector<FilterData> data = {PendulumData(DeriveSeed({61, uint64_t(d)}), 2000)};
@@ -108,7 +108,9 @@ TEST(ParamEstimation, FiftyDatasetsCoverTheTruthAndBeatItsNll) {
     ASSERT_TRUE(r.hessian_positive_definite) << d;
     for (int i = 0; i < 4; ++i) {
       within[i] += std::abs(r.theta[i] - truth[i]) <= 2.0 * r.std_errors[i];
-      mean_z[i] += (r.theta[i] - truth[i]) / r.std_errors[i] / datasets;
+      const double z = (r.theta[i] - truth[i]) / r.std_errors[i];
+      mean_z[i] += z / datasets;
+      mean_z2[i] += z * z / datasets;
     }
     const InnovationLikelihood<P, P::Angle> lik(spec, options, data);
     double nll_true = 0.0;
@@ -128,8 +130,9 @@ TEST(ParamEstimation, FiftyDatasetsCoverTheTruthAndBeatItsNll) {
     }
   }
   for (int i = 0; i < 4; ++i) {
-    std::printf("  %-6s within 2 SE of the truth: %d / %d, mean z %+.2f\n", names[i], within[i],
-                datasets, mean_z[i]);
+    // z = (estimate - truth) / SE: rms z near 1 says the SEs are honest.
+    std::printf("  %-6s within 2 SE of the truth: %d / %d, mean z %+.2f, rms z %.2f\n", names[i],
+                within[i], datasets, mean_z[i], std::sqrt(mean_z2[i]));
     EXPECT_GE(within[i], 45) << names[i];  // >= 90 %
   }
   std::printf("  NLL(estimate) <= NLL(truth): %d / %d\n", nll_ok, datasets);

@@ -111,6 +111,20 @@ TEST(OutputError, RejectsDataItCannotUse) {
   e = testing::ErrorText(
       [&] { FitOutputError(model, Spec(0.8, 0.1), {{.name = "len"}}, {Pendulum(0.0, 1.0)}, {}); });
   EXPECT_NE(e.find("has no parameter 'len'"), std::string::npos) << e;
+  // Checked and scaled as in the ML fit (adaptive/theta_scale.h): a
+  // negative bound of a positive parameter used to become log(-1) = NaN.
+  EstimatedParam negative{.name = "L"};
+  negative.lower = -1.0;
+  e = testing::ErrorText(
+      [&] { FitOutputError(model, Spec(0.8, 0.1), {negative}, {Pendulum(0.0, 1.0)}, {}); });
+  EXPECT_NE(e.find("--param-bounds: the lower bound of L must be finite and > 0, got -1"),
+            std::string::npos)
+      << e;
+  e = testing::ErrorText([&] {
+    FitOutputError(model, Spec(0.8, 0.1), {{.name = "L"}, {.name = "L"}}, {Pendulum(0.0, 1.0)},
+                   {});
+  });
+  EXPECT_NE(e.find("'L' is named twice"), std::string::npos) << e;
   OutputErrorOptions bad;
   bad.horizon = 0.0;
   e = testing::ErrorText(
