@@ -34,11 +34,15 @@
 //   ceres::Jet<double, 2> th[2] = {...};                  // gradient by AD
 //   ceres::Jet<double, 2> g = NegLogLikelihood(lik, th);
 //
-// CVODES. With spec.transition.integrator = cvodes the recursion runs in
-// double only, through a Cvodes transition (src/ode/cvodes.h; its flow
-// Jacobian from forward sensitivities for the EKF) at rtol <= kCvodesRtol,
-// atol <= kCvodesAtol: tighter than the filter's default so that central
-// differences of the NLL (tuner_impl.h) are honest. Run<Jet>() then fails.
+// CVODES. With spec.transition.integrator = cvodes, Run<double> steps a
+// Cvodes transition (src/ode/cvodes.h; its flow Jacobian from forward
+// sensitivities in x0 for the EKF) and Run<Jet> a CvodesThetaFlow
+// (src/ode/cvodes_theta_flow.h): forward sensitivities in theta of the state
+// and, for the EKF, of the flow Jacobian (the variational system integrated
+// with the state), so the gradient is exact to the integration tolerance.
+// Both at rtol <= kCvodesRtol, atol <= kCvodesAtol: tighter than the
+// filter's default, so that the NLL is smooth in theta to well below the
+// tuner's tolerances.
 //
 // WARNING: a Cvodes transition is not thread-safe, so neither is an
 // InnovationLikelihood with integrator cvodes: one per thread. A failed Cholesky,
@@ -55,6 +59,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -74,6 +79,7 @@
 #include "src/filters/kalman_step.h"
 #include "src/filters/sigma_point_step.h"
 #include "src/filters/sigma_rules.h"
+#include "src/ode/cvodes_theta_flow.h"
 #include "src/ode/fixed_step.h"
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
@@ -114,8 +120,7 @@ class InnovationLikelihood {
   const CovarianceParam<kM>& r_param() const { return r_; }
   long NumTerms() const { return terms_; }  // updates after burn-in, all datasets
   double dt_ref() const { return dt_ref_; }
-  // True when the process model is CVODES: only Run<double> works, and the
-  // tuner differentiates the NLL by central differences.
+  // True when the process model is CVODES.
   bool UsesCvodes() const { return cvodes_ != nullptr; }
 
   // CVODES tolerances of the likelihood (the spec's, if tighter).
@@ -190,6 +195,10 @@ class InnovationLikelihood {
   template <class T, class P>
   StateT<T> Propagate(const StateT<T>& x, double t0, double t1, double u, const P& p,
                       StateCovT<T>* F) const;
+  // The CVODES flow differentiated in C directions, made on first use (one
+  // per Jet size the tuner runs).
+  template <int C>
+  CvodesThetaFlow<Model, C>& ThetaFlow() const;
 
   FilterSpec spec_;
   TunerOptions options_;
@@ -217,6 +226,7 @@ class InnovationLikelihood {
   // differences. Step() is not const, hence mutable.
   TransitionOptions cvodes_options_;
   mutable std::unique_ptr<Transition<Model>> cvodes_;
+  mutable std::map<int, std::shared_ptr<void>> theta_flows_;  // by C
 };
 
 // NLL(theta), quiet NaN when the filter fails.
@@ -338,13 +348,6 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
   };
   const T* theta_q = theta;
   const T* theta_r = theta + q_.NumParams();
-  if constexpr (!std::is_same_v<T, double>) {
-    if (cvodes_ != nullptr) {
-      if (why != nullptr)
-        *why = "a CVODES process model has no AD gradient (use central differences)";
-      return false;
-    }
-  }
   const MeasCovT<T> R = r_.template Matrix<T>(theta_r, 0.0);
   StateCovT<T> Q = q_.template Matrix<T>(theta_q, dt_ref_);
   double q_dt = dt_ref_;
@@ -406,6 +409,9 @@ InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, doub
       cvodes_->SetInput(u);
       return F != nullptr ? cvodes_->StepWithJacobian(x, t0, t1, F) : cvodes_->Step(x, t0, t1);
     }
+  } else if constexpr (!kDiscreteTime<Model>) {
+    if (cvodes_ != nullptr)  // the same with dx/dtheta, dF/dtheta (cvodes_theta_flow.h)
+      return ThetaFlow<JetSize<T>::value>().Propagate(x, t0, t1, u, p, F);
   }
   const Integrator scheme = spec_.transition.integrator;
   const int substeps = spec_.transition.substeps;
@@ -416,6 +422,14 @@ InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, doub
         return FixedPropagate<Model, S>(scheme, xs, t0, t1, substeps, u, ParamsAs<Model, S>(p));
       },
       x, F);
+}
+
+template <class Model, class Meas>
+template <int C>
+CvodesThetaFlow<Model, C>& InnovationLikelihood<Model, Meas>::ThetaFlow() const {
+  std::shared_ptr<void>& flow = theta_flows_[C];
+  if (flow == nullptr) flow = std::make_shared<CvodesThetaFlow<Model, C>>(cvodes_options_);
+  return *static_cast<CvodesThetaFlow<Model, C>*>(flow.get());
 }
 
 template <class Model, class Meas>

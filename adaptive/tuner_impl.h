@@ -6,9 +6,7 @@
 // Usage (what ModelEntry::tune does):
 //   TuneResult r = TuneWith<models::Pendulum, models::Pendulum::Sin>(spec, options, data);
 //
-// Gradients (with a CVODES process model: central differences of the NLL
-// with step Objective::kCentralStep, since CVODES is not run on Jets).
-// The L-BFGS form (ceres::GradientProblemSolver) gets the exact
+// Gradients. The L-BFGS form (ceres::GradientProblemSolver) gets the exact
 // gradient of the NLL by forward-mode AD: the recursion runs on
 // ceres::Jet<double, C> with C = 2 (K <= 2) or 4 directions per pass; more
 // than 4 parameters are done in ceil(K / 4) passes (chunking, as
@@ -18,7 +16,8 @@
 // one Jet<8> pass and 1.3 s with one Jet<4> pass (the nested Jets of the EKF
 // grow with C times the state dimension). The EKF's Jacobians of the
 // fixed-step map need second derivatives for that and use NestedJet
-// (src/ode/nested_jet.h).
+// (src/ode/nested_jet.h). With a CVODES process model the same Jets run
+// through CVODES forward sensitivities in theta (src/ode/cvodes_theta_flow.h).
 //
 // The least-squares form (Levenberg-Marquardt, ceres::Solver with bounds)
 // minimises 1/2 sum r^2 over the residuals
@@ -74,18 +73,11 @@ class Objective {
   int NumParams() const { return k_; }
   const InnovationLikelihood<Model, Meas>& likelihood() const { return lik_; }
 
-  // Step in theta of the central differences used with a CVODES process
-  // model (no AD through CVODES). Truncation error ~ h^2 |f^(3)| / 6,
-  // rounding ~ eps_f / h with eps_f the CVODES noise in the NLL (rtol 1e-10);
-  // see tuner_test for the measured agreement with an exact gradient.
-  static constexpr double kCentralStep = 1e-4;
-
   bool Value(const double* theta, double* nll) const { return lik_.Nll(theta, nll); }
 
   // NLL and gradient (gradient may be null).
   bool ValueAndGradient(const double* theta, double* nll, double* gradient) const {
     if (gradient == nullptr || k_ == 0) return Value(theta, nll);
-    if (lik_.UsesCvodes()) return CentralDifferenceGradient(theta, nll, gradient);
     bool ok;
     if (k_ <= 2) {
       ok = ChunkedGradient<2>(theta, nll, gradient);
@@ -105,7 +97,6 @@ class Objective {
   // null.
   bool Residuals(const double* theta, double c, double* residuals, double* jacobian) const {
     if (jacobian == nullptr || k_ == 0) return ResidualsT<double>(theta, c, residuals);
-    if (lik_.UsesCvodes()) return CentralDifferenceResiduals(theta, c, residuals, jacobian);
     if (k_ <= 2) return ChunkedResiduals<2>(theta, c, residuals, jacobian);
     return ChunkedResiduals<4>(theta, c, residuals, jacobian);
   }
@@ -120,45 +111,6 @@ class Objective {
   }
 
  private:
-  // With CVODES: g_i = (f(theta + h e_i) - f(theta - h e_i)) / 2h.
-  bool CentralDifferenceGradient(const double* theta, double* nll, double* gradient) const {
-    if (!Value(theta, nll) || !std::isfinite(*nll)) return false;
-    std::vector<double> x(theta, theta + k_);
-    for (int i = 0; i < k_; ++i) {
-      double plus = 0.0, minus = 0.0;
-      x[i] = theta[i] + kCentralStep;
-      const bool ok_plus = Value(x.data(), &plus);
-      x[i] = theta[i] - kCentralStep;
-      const bool ok_minus = Value(x.data(), &minus);
-      x[i] = theta[i];
-      if (!ok_plus || !ok_minus) return false;
-      gradient[i] = (plus - minus) / (2.0 * kCentralStep);
-      if (!std::isfinite(gradient[i])) return false;
-    }
-    return true;
-  }
-
-  // The least-squares Jacobian by the same central differences.
-  bool CentralDifferenceResiduals(const double* theta, double c, double* residuals,
-                                  double* jacobian) const {
-    const long rows = NumResiduals();
-    if (!ResidualsT<double>(theta, c, residuals)) return false;
-    std::vector<double> x(theta, theta + k_), plus(rows), minus(rows);
-    for (int i = 0; i < k_; ++i) {
-      x[i] = theta[i] + kCentralStep;
-      const bool ok_plus = ResidualsT<double>(x.data(), c, plus.data());
-      x[i] = theta[i] - kCentralStep;
-      const bool ok_minus = ResidualsT<double>(x.data(), c, minus.data());
-      x[i] = theta[i];
-      if (!ok_plus || !ok_minus) return false;
-      for (long row = 0; row < rows; ++row)
-        jacobian[row * k_ + i] = (plus[row] - minus[row]) / (2.0 * kCentralStep);
-    }
-    for (long row = 0; row < rows; ++row)
-      if (!std::isfinite(residuals[row])) return false;
-    return true;
-  }
-
   template <int C>
   std::vector<ceres::Jet<double, C>> Seed(const double* theta, int first) const {
     std::vector<ceres::Jet<double, C>> th(k_);

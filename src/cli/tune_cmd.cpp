@@ -64,7 +64,7 @@ be > 0, p itself otherwise (a >= 0 one gets the bound 0). --param-bounds
 gives natural-scale bounds (else initial value * e^+-bound-width on the log
 scale), --param-prior adds 1/2 ((p - mean) / sd)^2 to the NLL. Gradients are
 exact (AD through the filter and the fixed-step integrator; with cvodes,
-central differences as for Q and R). The report gives each estimate with its
+CVODES forward sensitivities, as for Q and R). The report gives each estimate with its
 standard error from the observed Fisher information (the Hessian of the NLL),
 and names every direction that the data do not pin down ("g and L are not
 separately identifiable: the data pin down only g/L = ..."). The kf is not
@@ -80,8 +80,9 @@ a log-Cholesky factor (full); --q-param/--r-param default to the shape of the
 scalar, q-diag -> diag). 'fixed' keeps the initial matrix. The KF, EKF, IEKF,
 UKF, CKF and GHKF are supported (not the PF). Gradients are exact (automatic
 differentiation through the filter) with a fixed-step --integrator; with
-cvodes they are central differences of the NLL (step 1e-4 in the log
-parameters) with CVODES run at rtol <= 1e-10, atol <= 1e-12.
+cvodes, CVODES forward sensitivities in theta of the state (and, for the
+EKF, of the flow Jacobian's variational system) carry the same derivatives,
+with CVODES run at rtol <= 1e-10, atol <= 1e-12.
 
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
