@@ -9,7 +9,8 @@
 // with nu_k, S_k the innovations and their covariances of a linearised KF,
 // an EKF (IEKF) or a sigma-point filter (UKF, CKF, GHKF) run with Q(theta),
 // R(theta) over fixed-step (Euler, semi-implicit Euler, RK4; exact AD
-// gradient) or CVODES transitions (central-difference gradient). theta holds
+// gradient) or CVODES transitions (exact gradient from forward sensitivities
+// in theta, src/ode/cvodes_theta_flow.h). theta holds
 // log-variances, so every Q(theta), R(theta) is positive (semi-)definite by
 // construction.
 //

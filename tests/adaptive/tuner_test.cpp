@@ -27,6 +27,7 @@
 #include "adaptive/tuner.h"
 #include "adaptive/tuner_impl.h"
 #include "models/pendulum.h"
+#include "models/van_der_pol.h"
 #include "src/core/params.h"
 #include "src/core/random.h"
 #include "src/ode/fixed_step.h"
@@ -662,6 +663,40 @@ TEST(TunerCvodes, SensitivityGradientAgreesWithTheExactFlowGradientAndTunes) {
     EXPECT_NEAR(b.theta[0], a.theta[0], 1e-3);
     EXPECT_NEAR(b.theta[1], a.theta[1], 1e-3);
     EXPECT_NEAR(b.std_errors[1], a.std_errors[1], 0.05 * a.std_errors[1]);
+  }
+}
+
+// A stiff model (Van der Pol, mu = 10): CVODES runs BDF with Newton and a
+// difference-quotient Jacobian of the sensitivity-augmented system. The
+// gradient from the sensitivities against fourth-order central differences of
+// the double NLL (rtol 1e-12), EKF and CKF, diagonal Q and R.
+TEST(TunerCvodes, StiffModelBdfSensitivityGradientMatchesCentralDifferences) {
+  using V = models::VanDerPol;
+  const double dt = 0.01;
+  V::Params p;
+  p.mu = 10.0;
+  Mat<2, 2> Q = Mat<2, 2>::Zero();
+  Q.diagonal() << 1e-6, 1e-4;
+  const std::vector<FilterData> data = {Simulate<V, V::X>(
+      Integrator::kRk4, Vec<double, 2>(2.0, 0.0), dt, 100, Q, Mat<1, 1>::Constant(1e-3), 93, p)};
+  TunerOptions options;
+  options.q_param = NoiseParam::kDiag;
+  for (FilterKind kind : {FilterKind::kEkf, FilterKind::kCkf}) {
+    FilterSpec spec;
+    spec.params = {10.0};
+    spec.measurement = "x";
+    spec.filter = DefaultFilterOptions(kind);
+    spec.transition.integrator = Integrator::kCvodes;
+    spec.transition.rtol = 1e-12;
+    spec.transition.atol = 1e-14;
+    spec.x0 = {2.0, 0.0};
+    spec.p0 = {0.01, 0.0, 0.0, 0.01};
+    spec.q = {1e-5, 0.0, 0.0, 1e-3};
+    spec.r = {1e-2};
+    const InnovationLikelihood<V, V::X> lik(spec, options, data);
+    ASSERT_TRUE(lik.UsesCvodes());
+    ASSERT_EQ(lik.NumParams(), 3);
+    CheckGradient(lik, 94, FilterKindName(kind), {.h = 1e-3, .fourth_order = true});
   }
 }
 

@@ -1,8 +1,8 @@
 // Issue 12, done-when 1 with --integrator cvodes: 10 simulated pendulum
 // datasets with known L, b, qc, R, the EKF on a CVODES process model (the
-// tuner's gradient is then central differences of the NLL, step 1e-4 in
-// theta; adaptive/tuner_impl.h). Label `slow` (about 2 min): `make test`
-// runs it, the sanitizer build does not.
+// tuner's gradient from CVODES forward sensitivities in theta,
+// src/ode/cvodes_theta_flow.h). Label `slow` (about 40 s): `make test` runs
+// it, the sanitizer build does not.
 #include <gtest/gtest.h>
 
 #include <cmath>
