@@ -72,8 +72,7 @@ class Ekf final : public FilterCommon<Model, Meas> {
     const StateCov P_pred = EkfPredictCovariance<kN>(F, P_, Q);  // F P F^T + Q
     if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
-    x_ = x_pred;
-    P_ = P_pred;
+    this->SetPredicted(x_pred, P_pred, P_ * F.transpose());  // C = P F^T
     return FilterStatus::kOk;
   }
 

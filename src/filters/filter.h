@@ -97,6 +97,13 @@ class Filter {
   virtual const State& mean() const = 0;
   virtual const StateCov& cov() const = 0;
   virtual std::string last_error() const { return ""; }
+
+  // For the RTS smoother (rts_smoother.h): C = Cov(x_{k-1}, x_k | z_{1:k-1})
+  // of the last successful Predict, between the belief it started from and
+  // the predicted state (KF: P Phi^T; EKF: P F^T; sigma points:
+  // sum_i Wc_i (X_i - x)(X-_i - x-)^T). False for filters without one (the
+  // particle filter) or before any Predict.
+  virtual bool PredictCrossCov(StateCov* /*C*/) const { return false; }
 };
 
 // Wraps the angle components (flags[i] true) of a residual to (-pi, pi], for

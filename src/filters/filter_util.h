@@ -279,6 +279,11 @@ class FilterCommon : public Filter<Model, Meas> {
   const State& mean() const override { return x_; }
   const StateCov& cov() const override { return P_; }
   std::string last_error() const override { return error_; }
+  bool PredictCrossCov(StateCov* C) const override {
+    if (!have_cross_) return false;
+    *C = cross_;
+    return true;
+  }
 
  protected:
   void SetPrior(const State& x, const StateCov& P) {
@@ -287,6 +292,7 @@ class FilterCommon : public Filter<Model, Meas> {
     error_.clear();
     prior_error_.clear();
     initialized_ = true;
+    have_cross_ = false;
     StateCov L;
     std::string why;
     if (!x.allFinite()) {
@@ -312,8 +318,19 @@ class FilterCommon : public Filter<Model, Meas> {
     return result;
   }
 
+  // A successful Predict from (x_, P_) to (x_pred, P_pred) with cross-
+  // covariance C (see Filter::PredictCrossCov).
+  void SetPredicted(const State& x_pred, const StateCov& P_pred, const StateCov& C) {
+    x_ = x_pred;
+    P_ = P_pred;
+    cross_ = C;
+    have_cross_ = true;
+  }
+
   State x_ = State::Zero();
   StateCov P_ = StateCov::Identity();
+  StateCov cross_ = StateCov::Zero();
+  bool have_cross_ = false;
   std::string error_;
 
  private:

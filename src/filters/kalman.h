@@ -105,8 +105,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     KfPredict<Model, kM>(lin_, step_, input_, Q, &x_pred, &P_pred);
     if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
-    x_ = x_pred;
-    P_ = P_pred;
+    this->SetPredicted(x_pred, P_pred, P_ * step_.phi.transpose());  // C = P Phi^T
     return FilterStatus::kOk;
   }
 
