@@ -83,12 +83,12 @@ void Run(benchmark::State& state, const std::string& kind, bool smooth) {
 void RegisterSmootherBenchmarks() {
   for (const char* kind : {"kf", "ekf", "ukf", "ckf"}) {
     const std::string suffix = std::string(kind) + "/pendulum/n2m1/rk4/2000-steps";
-    benchmark::RegisterBenchmark(("Forward/" + suffix).c_str(),
-                                 [kind](benchmark::State& s) { Run(s, kind, false); })
-        ->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("ForwardRts/" + suffix).c_str(),
-                                 [kind](benchmark::State& s) { Run(s, kind, true); })
-        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("Forward/" + suffix).c_str(), [kind](benchmark::State& s) {
+      Run(s, kind, false);
+    })->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("ForwardRts/" + suffix).c_str(), [kind](benchmark::State& s) {
+      Run(s, kind, true);
+    })->Unit(benchmark::kMicrosecond);
   }
 }
 const bool kRegistered = (RegisterSmootherBenchmarks(), true);

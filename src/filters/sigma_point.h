@@ -101,8 +101,9 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
     // C = sum_i Wc_i (X_i - x)(X-_i - x-)^T
-    this->SetPredicted(x_pred, P_pred,
-                       WeightedCrossCov<kN, kN>(points_, x_, propagated_, x_pred, set_.cov_weights));
+    this->SetPredicted(
+        x_pred, P_pred,
+        WeightedCrossCov<kN, kN>(points_, x_, propagated_, x_pred, set_.cov_weights));
     have_propagated_ = true;
     return FilterStatus::kOk;
   }
