@@ -52,6 +52,7 @@ void Run(benchmark::State& state, const std::string& kind, bool smooth) {
   const Mat<2, 2> Q = 1e-4 * Mat<2, 2>::Identity();
   const Mat<1, 1> R = Mat<1, 1>::Constant(1e-2);
   RtsSmoother<2> rts;
+  rts.Reserve(kSteps);
   for (auto _ : state) {
     rts.Clear();
     filter->Initialize(Vec<double, 2>(0.5, 0.0), 0.01 * Mat<2, 2>::Identity());
@@ -59,7 +60,7 @@ void Run(benchmark::State& state, const std::string& kind, bool smooth) {
       if (k > 0) {
         filter->Predict((k - 1) * kDt, k * kDt, Q);
         if (smooth) {
-          Mat<2, 2> C;
+          Mat<2, 2> C = Mat<2, 2>::Zero();
           filter->PredictCrossCov(&C);
           rts.AddPredicted(filter->mean(), filter->cov(), C);
         }

@@ -15,6 +15,7 @@ namespace estlab::cli {
 int RunSimulate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);
 int RunFilterCommand(const std::vector<std::string>& args);
+int RunSmoothCommand(const std::vector<std::string>& args);
 int RunStudyCommand(const std::vector<std::string>& args);
 int RunMerge(const std::vector<std::string>& args);
 int RunFigures(const std::vector<std::string>& args);

@@ -63,6 +63,36 @@ Without --out only the summary is printed. A filter that diverges exits 1
 naming the step and time; est.csv keeps every row computed before.
 )";
 
+constexpr const char* kSmoothExamples = R"(Examples:
+  # Simulate the pendulum, then smooth it with the unscented RTS smoother (URTS):
+  estlab simulate --model pendulum --param g=9.81 --t-end 5 --dt 0.01 --x0 theta=1.5 \
+      --measure sin --meas-noise-var 0.1 --process-noise-var 3e-9,1e-4 --out d.csv
+  estlab smooth --model pendulum --param g=9.81 --measure sin --filter ukf --data d.csv \
+      --integrator euler --p0-diag 1,1 --q-white-accel 0.01 --r-diag 0.1 --out smoothed.csv
+  # The extended RTS smoother with the lag-one covariances (for EM), JSON summary:
+  estlab smooth --model pendulum --param g=9.81 --measure sin --filter ekf --data d.csv \
+      --integrator euler --p0-diag 1,1 --q-white-accel 0.01 --r-diag 0.1 --full-cov \
+      --out smoothed.csv --json
+  # The particle smoother (forward filtering, backward simulation of 200 trajectories):
+  estlab smooth --model pendulum --param g=9.81 --measure sin --filter pf --particles 2000 \
+      --smoother-trajectories 200 --data d.csv --integrator euler --p0-diag 1,1 \
+      --q-white-accel 0.01 --r-diag 0.1 --out smoothed_pf.csv
+
+Smoothers: kf -> rts (exact), ekf -> erts, iekf -> iekf-rts, ukf -> urts,
+ckf -> ckf-rts, ghkf -> ghkf-rts (the Gaussian RTS smoother with each filter's
+prediction cross-covariance), pf -> pf-bs (forward filtering, backward
+simulation; needs a positive definite Q). Every option of 'estlab filter'
+applies (data, columns, --config, adaptation).
+
+Output: with --out, smoothed.csv with t, <state>_est, <state>_var
+[, cov_<a>_<b> and lag1_<a>_<b> = Cov(a_k, b_k+1 | all data) with --full-cov]
+[, <state>_err, nees] of the smoothed estimates (pf-bs: the mean and variance of
+its trajectories, no lag-one). The summary (and --json) gives the smoother's
+RMSE, MAE and NEES, and the forward filter's under "filter"; the log-likelihood
+and NIS are the forward filter's. A filter that diverges exits 1 naming the
+step; the rows before it are smoothed and written.
+)";
+
 // "Far" outside the 95% bounds of the mean NIS: above kNisFarFactor times the
 // upper bound or below the lower bound divided by it. The bounds of a mean
 // over hundreds of updates are narrow (about 0.86 .. 1.14 for one output and
@@ -104,23 +134,33 @@ void PrintAdaptClips(const FilterSummary& s, const AdaptSpec& adapt) {
 
 void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& out_path) {
   std::cout << std::setprecision(5);
-  std::cout << "filter        " << s.filter << "\nsteps         " << s.steps << " (" << s.updates
-            << " updates)\nstatus        " << s.status << "\n";
+  const FilterSummary* f = s.forward.get();  // smoother: the forward filter's
+  if (f != nullptr) {
+    std::cout << "smoother      " << s.filter << " (forward filter " << f->filter << ")\n";
+  } else {
+    std::cout << "filter        " << s.filter << "\n";
+  }
+  std::cout << "steps         " << s.steps << " (" << s.updates << " updates)\nstatus        "
+            << s.status << "\n";
   if (!s.rmse.empty()) {
-    std::cout << "\n  state          RMSE          MAE\n";
+    std::cout << "\n  state          RMSE          MAE" << (f ? "   filter RMSE" : "") << "\n";
     for (size_t i = 0; i < s.states.size(); ++i) {
       std::cout << "  " << std::left << std::setw(12) << s.states[i] << std::right << std::setw(12)
-                << s.rmse[i] << "  " << std::setw(12) << s.mae[i] << "\n";
+                << s.rmse[i] << "  " << std::setw(12) << s.mae[i];
+      if (f != nullptr && i < f->rmse.size()) std::cout << "  " << std::setw(12) << f->rmse[i];
+      std::cout << "\n";
     }
     std::cout << "\n";
   }
-  std::cout << "log-likelihood  " << s.loglik << "\n";
+  std::cout << "log-likelihood  " << s.loglik << (f ? "   (the forward filter's)" : "") << "\n";
   std::cout << "mean NIS        " << s.mean_nis << "   (95% bounds " << s.nis_bounds95[0] << " .. "
             << s.nis_bounds95[1] << ")\n";
   PrintNisWarning(s);
   if (!s.rmse.empty()) {
     std::cout << "mean NEES       " << s.mean_nees << "   (95% bounds " << s.nees_bounds95[0]
-              << " .. " << s.nees_bounds95[1] << ")\n";
+              << " .. " << s.nees_bounds95[1] << ")";
+    if (f != nullptr) std::cout << "   filter " << f->mean_nees;
+    std::cout << "\n";
   }
   if (s.adapt_clips > 0) PrintAdaptClips(s, adapt);
   std::cout << "wall time       " << s.wall_s << " s (" << s.us_per_step << " us/step)\n";
@@ -129,9 +169,16 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
 
 }  // namespace
 
-std::string FilterSummaryJson(const FilterSummary& s) {
-  JsonWriter j;
-  j.BeginObject().Key("filter").Value(s.filter);
+namespace {
+
+void WriteSummaryJson(const FilterSummary& s, JsonWriter& j) {
+  j.BeginObject();
+  if (s.forward) {
+    j.Key("smoother").Value(s.filter).Key("filter");
+    WriteSummaryJson(*s.forward, j);
+  } else {
+    j.Key("filter").Value(s.filter);
+  }
   j.Key("rmse").BeginObject();
   for (size_t i = 0; i < s.rmse.size(); ++i) j.Key(s.states[i]).Value(s.rmse[i]);
   j.EndObject().Key("mae").BeginObject();
@@ -152,16 +199,35 @@ std::string FilterSummaryJson(const FilterSummary& s) {
   if (!s.ok) j.Key("message").Value(s.message);
   j.Key("adapt_clips").Value(s.adapt_clips);
   j.EndObject();
+}
+
+}  // namespace
+
+// The keys of `estlab filter --json`; for a smoother, "smoother" names it, its
+// rmse, mae and NEES are the smoothed estimates' and "filter" holds the
+// forward filter's summary.
+std::string FilterSummaryJson(const FilterSummary& s) {
+  JsonWriter j;
+  WriteSummaryJson(s, j);
   return j.str();
 }
 
-int RunFilterCommand(const std::vector<std::string>& args) {
+namespace {
+
+// `estlab filter` and `estlab smooth`: the same options and checks; smooth
+// adds --smoother-trajectories and writes the smoothed rows.
+int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   po::options_description desc(
-      "estlab filter: run a Kalman-family or particle filter over a data file");
+      smooth ? "estlab smooth: run a filter forward, then its smoother backward (RTS for the "
+               "Gaussian filters, backward simulation for the particle filter)"
+             : "estlab filter: run a Kalman-family or particle filter over a data file");
   desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
       "out", po::value<std::string>(),
       "per-step output CSV (optional: without it only the summary; never an input file)")(
       "json", "print a JSON summary");
+  if (smooth)
+    desc.add_options()("smoother-trajectories", po::value<int>()->default_value(100),
+                       "pf: backward-simulated trajectories of the particle smoother (>= 2)");
   AddFilterOptions(&desc);
   AddConfigOption(&desc);
   po::variables_map vm;
@@ -169,7 +235,7 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   MergeConfigFiles(&vm);
   po::notify(vm);
   if (vm.count("help")) {
-    std::cout << desc << "\n" << kExamples;
+    std::cout << desc << "\n" << (smooth ? kSmoothExamples : kExamples);
     return 0;
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
@@ -177,7 +243,14 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   if (vm.count("out"))
     RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
-  const FilterSpec spec = BuildFilterSpec(vm, model);
+  FilterSpec spec = BuildFilterSpec(vm, model);
+  if (smooth) {
+    spec.smooth = true;
+    spec.smoother_trajectories = vm["smoother-trajectories"].as<int>();
+    if (spec.smoother_trajectories < 2)
+      throw InputError("--smoother-trajectories must be at least 2, got " +
+                       std::to_string(spec.smoother_trajectories));
+  }
   const FilterData data =
       LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
                      ParseColumnRenames(vm));
@@ -205,5 +278,10 @@ int RunFilterCommand(const std::vector<std::string>& args) {
   }
   return 0;
 }
+
+}  // namespace
+
+int RunFilterCommand(const std::vector<std::string>& args) { return RunFilterOrSmooth(args, false); }
+int RunSmoothCommand(const std::vector<std::string>& args) { return RunFilterOrSmooth(args, true); }
 
 }  // namespace estlab::cli

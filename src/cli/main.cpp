@@ -26,6 +26,8 @@ const std::vector<Command>& Commands() {
        estlab::cli::RunSimulate},
       {"filter", "run KF, EKF/IEKF, UKF/CKF/GHKF (optionally adaptive) or PF over a data CSV",
        estlab::cli::RunFilterCommand},
+      {"smooth", "run a filter, then its smoother (RTS, ERTS, URTS, ..., particle FFBSi)",
+       estlab::cli::RunSmoothCommand},
       {"tune", "tune Q and R by maximum innovation likelihood (Ceres), validate",
        estlab::cli::RunTune},
       {"study", "run a Monte Carlo study from a config file", estlab::cli::RunStudyCommand},

@@ -26,7 +26,8 @@
 //     rts.AddPredicted(filter.mean(), filter.cov(), C);
 //     filter.Update(...);                                     // if z_k
 //     rts.AddFiltered(filter.mean(), filter.cov());
-//   if (!rts.Smooth(&why)) ...;   rts.mean(k), rts.cov(k), rts.lag_one_cov(k)
+//   if (!rts.Smooth(&why, LagOne::kCompute)) ...;
+//   rts.mean(k), rts.cov(k), rts.lag_one_cov(k)
 //
 // WARNING: differences of angle states are not wrapped (the filters do not
 // wrap their state either); a smoothed angle that crosses +-pi between steps
@@ -43,6 +44,10 @@
 
 namespace estlab {
 
+// Whether Smooth computes the lag-one cross-covariances (EM needs them; the
+// smoothed means and covariances do not).
+enum class LagOne { kSkip, kCompute };
+
 template <int N>
 class RtsSmoother {
  public:
@@ -50,52 +55,75 @@ class RtsSmoother {
   using StateCov = Mat<N, N>;
 
   void Clear() {
-    filtered_x_.clear();
-    filtered_P_.clear();
-    predicted_x_.clear();
-    predicted_P_.clear();
-    cross_.clear();
+    steps_.clear();
+    lag_one_.clear();
   }
-  // Step k's filtered belief; the first call is step 0.
+  void Reserve(size_t steps) { steps_.reserve(steps); }
+  // Step k's filtered belief; the first call is step 0. After the prediction
+  // to step k (AddPredicted), the next AddFiltered is step k.
   void AddFiltered(const State& x, const StateCov& P) {
-    filtered_x_.push_back(x);
-    filtered_P_.push_back(P);
+    if (steps_.empty() || steps_.back().has_filtered) steps_.emplace_back();
+    Step& s = steps_.back();
+    s.x = x;
+    s.P = P;
+    s.has_filtered = true;
   }
-  // The prediction to the next step, with its cross-covariance C.
+  // Replaces the newest filtered belief (a second measurement at the same
+  // time: no prediction between the two updates).
+  void ReplaceFiltered(const State& x, const StateCov& P) {
+    steps_.back().x = x;
+    steps_.back().P = P;
+  }
+  // The prediction from the newest filtered step to the next, with its
+  // cross-covariance C.
   void AddPredicted(const State& x_pred, const StateCov& P_pred, const StateCov& C) {
-    predicted_x_.push_back(x_pred);
-    predicted_P_.push_back(P_pred);
-    cross_.push_back(C);
+    steps_.emplace_back();
+    Step& s = steps_.back();
+    s.x_pred = x_pred;
+    s.P_pred = P_pred;
+    s.C = C;
+    s.has_predicted = true;
   }
+  // Forgets a prediction whose filtered belief never came (the forward pass
+  // stopped in its update), so that Smooth works on the steps before.
+  void DropUnfinishedStep() {
+    if (!steps_.empty() && !steps_.back().has_filtered) steps_.pop_back();
+  }
+  // The number of filtered steps recorded (= size() after Smooth).
+  size_t filtered_steps() const { return steps_.size(); }
 
-  // The backward pass. False, with the step in *why, when a P-_{k+1} is not
-  // positive definite or the result is not finite, or the recording is
-  // inconsistent (one prediction between consecutive filtered steps).
-  bool Smooth(std::string* why) {
-    const size_t K = filtered_x_.size();
-    if (K == 0 || predicted_x_.size() + 1 != K) {
-      *why = "RTS smoother: " + std::to_string(K) + " filtered steps need " +
-             std::to_string(K == 0 ? 0 : K - 1) + " predictions, got " +
-             std::to_string(predicted_x_.size());
+  // The backward pass, in place. False, with the step in *why, when a
+  // P-_{k+1} is not positive definite or the result is not finite, or the
+  // recording is inconsistent (a prediction without its filtered belief).
+  bool Smooth(std::string* why, LagOne lag_one = LagOne::kSkip) {
+    const size_t K = steps_.size();
+    if (K == 0 || !steps_.back().has_filtered) {
+      *why = K == 0 ? "RTS smoother: no filtered step recorded"
+                    : "RTS smoother: the last prediction has no filtered belief";
       return false;
     }
-    smoothed_x_ = filtered_x_;
-    smoothed_P_ = filtered_P_;
-    lag_one_.assign(K - 1, StateCov::Zero());
+    lag_one_.assign(lag_one == LagOne::kCompute ? K - 1 : 0, StateCov::Zero());
     for (size_t k = K - 1; k-- > 0;) {
+      Step& s = steps_[k];
+      const Step& next = steps_[k + 1];  // smoothed already; holds the prediction to k + 1
+      if (!next.has_predicted) {
+        *why = "RTS smoother: step " + std::to_string(k + 1) + " has no prediction from step " +
+               std::to_string(k);
+        return false;
+      }
       // G_k = C_{k+1} (P-_{k+1})^-1, i.e. G^T = (P-)^-1 C^T
-      const Eigen::LLT<StateCov> llt(predicted_P_[k]);
+      const Eigen::LLT<StateCov> llt(next.P_pred);
       if (llt.info() != Eigen::Success) {
         *why = "RTS smoother: the predicted covariance of step " + std::to_string(k + 1) +
                " is not positive definite";
         return false;
       }
-      const StateCov G = llt.solve(cross_[k].transpose()).transpose();
-      smoothed_x_[k] = filtered_x_[k] + G * (smoothed_x_[k + 1] - predicted_x_[k]);
-      smoothed_P_[k] = filtered_P_[k] + G * (smoothed_P_[k + 1] - predicted_P_[k]) * G.transpose();
-      Symmetrize<N>(&smoothed_P_[k]);
-      lag_one_[k] = G * smoothed_P_[k + 1];
-      if (!BeliefFinite<N>(smoothed_x_[k], smoothed_P_[k])) {
+      const StateCov G = llt.solve(next.C.transpose()).transpose();
+      s.x += G * (next.x - next.x_pred);
+      s.P += G * (next.P - next.P_pred) * G.transpose();
+      Symmetrize<N>(&s.P);
+      if (!lag_one_.empty()) lag_one_[k] = G * next.P;
+      if (!BeliefFinite<N>(s.x, s.P)) {
         *why = "RTS smoother: the smoothed mean or covariance of step " + std::to_string(k) +
                " is not finite";
         return false;
@@ -104,15 +132,23 @@ class RtsSmoother {
     return true;
   }
 
-  size_t size() const { return smoothed_x_.size(); }
-  const State& mean(size_t k) const { return smoothed_x_[k]; }
-  const StateCov& cov(size_t k) const { return smoothed_P_[k]; }
-  // Cov(x_k, x_{k+1} | all data), k < size() - 1.
+  size_t size() const { return steps_.size(); }
+  // After Smooth: the smoothed mean and covariance of step k.
+  const State& mean(size_t k) const { return steps_[k].x; }
+  const StateCov& cov(size_t k) const { return steps_[k].P; }
+  // Cov(x_k, x_{k+1} | all data), k < size() - 1; Smooth(.., LagOne::kCompute) only.
   const StateCov& lag_one_cov(size_t k) const { return lag_one_[k]; }
 
  private:
-  std::vector<State> filtered_x_, predicted_x_, smoothed_x_;
-  std::vector<StateCov> filtered_P_, predicted_P_, cross_, smoothed_P_, lag_one_;
+  // Step k: its filtered (then smoothed) belief, and the prediction from
+  // step k - 1 to it (unused for k = 0).
+  struct Step {
+    State x = State::Zero(), x_pred = State::Zero();
+    StateCov P = StateCov::Zero(), P_pred = StateCov::Zero(), C = StateCov::Zero();
+    bool has_filtered = false, has_predicted = false;
+  };
+  std::vector<Step> steps_;
+  std::vector<StateCov> lag_one_;
 };
 
 }  // namespace estlab

@@ -1,6 +1,6 @@
 // Runs one filter over a dataset: predict to each measurement time, update
 // when the row has a measurement, record the per-step diagnostics and the
-// summary metrics. Include only from the generated per-model units (models/model_list.cmake).
+// summary metrics; with spec.smooth, then its smoother's backward pass. Include only from the generated per-model units (models/model_list.cmake).
 //
 // Per step k (time t_k):
 //   Q_k = Q, or qc * Q_wa(t_k - t_{k-1})       (white-noise acceleration)
@@ -25,6 +25,7 @@
 #include "src/filters/noise_adapter.h"
 #include "src/run/filter_spec.h"
 #include "src/run/first_sample.h"
+#include "src/run/smoother_recorder.h"
 #include "src/run/step_loop.h"
 
 namespace estlab {
@@ -56,6 +57,165 @@ std::unique_ptr<Filter<Model, Meas>> MakeFilter(const FilterSpec& spec,
       spec.filter);
 }
 
+// One row of the forward pass: its belief (filtered, or smoothed after the
+// backward pass) and its innovation statistics.
+template <int N, int M>
+struct RowRecord {
+  double t = 0.0;
+  Vec<double, N> x;
+  Mat<N, N> P;
+  bool have_z = false;
+  Vec<double, M> nu;
+  double nis = 0.0, loglik = 0.0;
+  size_t step = 0;  // the smoother's step (smoother_recorder.h)
+};
+
+// Which columns a run writes (EstimateColumns).
+struct RowLayout {
+  bool full_cov = false;
+  bool innovations = true;  // nu_<output>, nis, loglik: the filter's, not a smoother's
+  bool lag_one = false;     // smooth --full-cov: lag1_<a>_<b> = Cov(a_k, b_{k+1} | all data)
+};
+
+// t, <state>_est, <state>_var [, cov_<a>_<b>] [, lag1_<a>_<b>]
+// [, nu_<output>, nis, loglik] [, <state>_err, nees].
+template <class Model, class Meas>
+std::vector<std::string> EstimateColumns(const RowLayout& layout, bool has_truth) {
+  constexpr int N = Model::kStateDim;
+  const auto& names = Model::kStateNames;
+  std::vector<std::string> cols{"t"};
+  for (const char* name : names) cols.push_back(std::string(name) + "_est");
+  for (const char* name : names) cols.push_back(std::string(name) + "_var");
+  if (layout.full_cov) {
+    for (int i = 0; i < N; ++i)
+      for (int j = i + 1; j < N; ++j)
+        cols.push_back(std::string("cov_") + names[i] + "_" + names[j]);
+  }
+  if (layout.lag_one) {
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < N; ++j) cols.push_back(std::string("lag1_") + names[i] + "_" + names[j]);
+  }
+  if (layout.innovations) {
+    for (const char* o : Meas::kOutputs) cols.push_back(std::string("nu_") + o);
+    cols.push_back("nis");
+    cols.push_back("loglik");
+  }
+  if (has_truth) {
+    for (const char* name : names) cols.push_back(std::string(name) + "_err");
+    cols.push_back("nees");
+  }
+  return cols;
+}
+
+// The rows of `records` (when rows != nullptr) and, with truth, the RMSE,
+// MAE and mean NEES of their beliefs in *s:
+//   e_k = x_k - x^_k (angles wrapped), nees_k = e^T P^-1 e.
+// lag_one(k) gives the lag-one covariance of record k (nullptr: NaN).
+template <class Model, class Meas, class LagOneFn>
+void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& records,
+              const FilterData& data, const RowLayout& layout, LagOneFn&& lag_one,
+              std::vector<std::vector<double>>* rows, FilterSummary* s) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  using StateCov = Mat<N, N>;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> sq_err(N, 0.0), abs_err(N, 0.0);
+  double nees_sum = 0.0;
+  long nees_count = 0;
+  for (size_t k = 0; k < records.size(); ++k) {
+    const RowRecord<N, M>& r = records[k];
+    std::vector<double> row{r.t};
+    for (int i = 0; i < N; ++i) row.push_back(r.x(i));
+    for (int i = 0; i < N; ++i) row.push_back(r.P(i, i));
+    if (layout.full_cov) {
+      for (int i = 0; i < N; ++i)
+        for (int j = i + 1; j < N; ++j) row.push_back(r.P(i, j));
+    }
+    if (layout.lag_one) {
+      const StateCov* L = lag_one(r.step);
+      for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) row.push_back(L ? (*L)(i, j) : nan);
+    }
+    if (layout.innovations) {
+      for (int j = 0; j < M; ++j) row.push_back(r.have_z ? r.nu(j) : nan);
+      row.push_back(r.have_z ? r.nis : nan);
+      row.push_back(r.have_z ? r.loglik : nan);
+    }
+    if (data.has_truth) {
+      Vec<double, N> e;
+      bool truth_ok = true;
+      for (int i = 0; i < N; ++i) {
+        e(i) = r.x(i) - data.truth[k * N + i];
+        if (Model::kAngleStates[i]) e(i) = WrapAngle(e(i));
+        if (!std::isfinite(e(i))) truth_ok = false;
+      }
+      double nees = nan;
+      if (truth_ok) {
+        const Eigen::LLT<StateCov> llt(r.P);
+        if (llt.info() == Eigen::Success) {
+          nees = e.dot(llt.solve(e));
+          nees_sum += nees;
+          ++nees_count;
+        }
+        for (int i = 0; i < N; ++i) {
+          sq_err[i] += e(i) * e(i);
+          abs_err[i] += std::abs(e(i));
+        }
+      }
+      for (int i = 0; i < N; ++i) row.push_back(e(i));
+      row.push_back(nees);
+    }
+    if (rows != nullptr) rows->push_back(std::move(row));
+  }
+  s->rmse.clear();
+  s->mae.clear();
+  if (data.has_truth && !records.empty()) {
+    for (int i = 0; i < N; ++i) {
+      s->rmse.push_back(std::sqrt(sq_err[i] / double(records.size())));
+      s->mae.push_back(abs_err[i] / double(records.size()));
+    }
+  }
+  s->mean_nees = nees_count ? nees_sum / double(nees_count) : nan;
+  ChiSquareBounds95(nees_count, N, s->nees_bounds95);
+}
+
+inline bool IsParticle(const FilterSpec& spec) { return spec.kind() == FilterKind::kPf; }
+
+// `estlab smooth`: the forward summary of `records` goes to out->summary.forward,
+// the backward pass replaces each record's belief by the smoothed one, and
+// the rows and error statistics are the smoother's. A backward pass that
+// fails leaves no rows (a filtered row under a smoother's name would be
+// silently wrong) and the status "smoother failed" naming the step.
+template <class Model, class Meas>
+void SmoothRecords(const FilterData& data, const RowLayout& layout,
+                   SmootherRecorder<Model, Meas>* smoother,
+                   std::vector<RowRecord<Model::kStateDim, Meas::kDim>>* records,
+                   FilterRunOutput* out) {
+  using StateCov = Mat<Model::kStateDim, Model::kStateDim>;
+  FilterSummary& s = out->summary;
+  auto forward = std::make_shared<FilterSummary>(s);
+  EmitRows<Model, Meas>(*records, data, layout, [](size_t) -> const StateCov* { return nullptr; },
+                        nullptr, forward.get());
+  s.filter = SmootherName(forward->filter);
+  s.forward = forward;
+  if (records->empty()) return;
+  std::string why;
+  if (!smoother->Smooth(layout.lag_one, &why)) {
+    s.ok = false;
+    s.status = "smoother failed";
+    s.message = "smoother " + s.filter + ": " + why + "; no smoothed rows written";
+    s.rmse.clear();
+    s.mae.clear();
+    return;
+  }
+  for (auto& r : *records) {
+    r.x = smoother->mean(r.step);
+    r.P = smoother->cov(r.step);
+  }
+  EmitRows<Model, Meas>(*records, data, layout,
+                        [&](size_t k) { return smoother->lag_one(k); }, &out->rows, &s);
+}
+
 template <class Model, class Meas>
 FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   constexpr int N = Model::kStateDim;
@@ -72,33 +232,24 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   StateCov Q = spec.q_white_accel ? StateCov::Zero() : MatFromVector<N, N>(spec.q);
   bool q_adapted = false;
   Mat<M, M> R = MatFromVector<M, M>(spec.r);
+  std::optional<SmootherRecorder<Model, Meas>> smoother;
+  if (spec.smooth) smoother.emplace(spec, filter.get(), transition.get());
 
   FilterRunOutput out;
   FilterSummary& s = out.summary;
   s.filter = filter->Name();
   for (const char* name : Model::kStateNames) s.states.push_back(name);
-  auto& cols = out.columns;
-  cols.push_back("t");
-  for (const char* name : Model::kStateNames) cols.push_back(std::string(name) + "_est");
-  for (const char* name : Model::kStateNames) cols.push_back(std::string(name) + "_var");
-  if (spec.full_cov) {
-    for (int i = 0; i < N; ++i)
-      for (int j = i + 1; j < N; ++j)
-        cols.push_back(std::string("cov_") + Model::kStateNames[i] + "_" + Model::kStateNames[j]);
-  }
-  for (const char* o : Meas::kOutputs) cols.push_back(std::string("nu_") + o);
-  cols.push_back("nis");
-  cols.push_back("loglik");
-  if (data.has_truth) {
-    for (const char* name : Model::kStateNames) cols.push_back(std::string(name) + "_err");
-    cols.push_back("nees");
-  }
+  const RowLayout layout{.full_cov = spec.full_cov,
+                         .innovations = !spec.smooth,
+                         .lag_one = spec.smooth && spec.full_cov && !IsParticle(spec)};
+  out.columns = EstimateColumns<Model, Meas>(layout, data.has_truth);
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
   filter->Initialize(PriorMean<Model, Meas>(spec, data), MatFromVector<N, N>(spec.p0));
-  std::vector<double> sq_err(N, 0.0), abs_err(N, 0.0);
-  double nis_sum = 0.0, nees_sum = 0.0;
-  long nees_count = 0;
+  if (smoother) smoother->OnPrior();
+  std::vector<RowRecord<N, M>> records;
+  records.reserve(data.t.size());
+  double nis_sum = 0.0;
 
   auto fail = [&](size_t k, const std::string& what) {
     s.ok = false;
@@ -111,16 +262,23 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   auto predict = [&](size_t k, double t0, double t1, double u) {
     filter->SetInput(u);
     if (spec.q_white_accel && !q_adapted) Q = WhiteAccelQ<Model>(spec.qc, t1 - t0);
+    std::string why;
+    if (smoother && !smoother->BeforePredict(t0, t1, Q, &why)) return fail(k, why);
     const FilterStatus st = filter->Predict(t0, t1, Q);
-    if (st == FilterStatus::kOk) return true;
-    return fail(k, std::string("prediction failed: ") + FilterStatusName(st) +
-                       (filter->last_error().empty() ? "" : " - " + filter->last_error()));
+    if (st != FilterStatus::kOk)
+      return fail(k, std::string("prediction failed: ") + FilterStatusName(st) +
+                         (filter->last_error().empty() ? "" : " - " + filter->last_error()));
+    if (smoother && !smoother->AfterPredict(&why)) return fail(k, why);
+    return true;
   };
   auto row = [&](size_t k, const Vec<double, M>* z) {
     const StateCov p_pred = filter->cov();
-    StepResult<M> r;
+    RowRecord<N, M> rec;
+    rec.t = data.t[k];
+    rec.have_z = z != nullptr;
+    rec.nu.setConstant(nan);
     if (z != nullptr) {
-      r = filter->Update(*z, R);
+      const StepResult<M> r = filter->Update(*z, R);
       if (r.status != FilterStatus::kOk)
         return fail(k, std::string("update failed: ") + FilterStatusName(r.status) +
                            (r.message.empty() ? "" : " - " + r.message));
@@ -134,73 +292,43 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
       ++s.updates;
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
+      rec.nu = r.innovation;
+      rec.nis = r.nis;
+      rec.loglik = r.log_likelihood;
       if (adapter) {
         adapter->Observe(r, p_pred, filter->cov(), &Q, &R);
         if (spec.adapt.adapt_q) q_adapted = true;
       }
     }
-    const auto& x = filter->mean();
-    const StateCov& P = filter->cov();
+    rec.x = filter->mean();
+    rec.P = filter->cov();
     std::string why;
-    if (!WithinDivergenceGuard<N>(x, P, spec.max_cov_trace, &why)) return fail(k, why);
-    const bool have_z = z != nullptr;
-    std::vector<double> out_row;
-    out_row.reserve(cols.size());
-    out_row.push_back(data.t[k]);
-    for (int i = 0; i < N; ++i) out_row.push_back(x(i));
-    for (int i = 0; i < N; ++i) out_row.push_back(P(i, i));
-    if (spec.full_cov) {
-      for (int i = 0; i < N; ++i)
-        for (int j = i + 1; j < N; ++j) out_row.push_back(P(i, j));
-    }
-    for (int j = 0; j < M; ++j) out_row.push_back(have_z ? r.innovation(j) : nan);
-    out_row.push_back(have_z ? r.nis : nan);
-    out_row.push_back(have_z ? r.log_likelihood : nan);
-    if (data.has_truth) {
-      Vec<double, N> e;
-      bool truth_ok = true;
-      for (int i = 0; i < N; ++i) {
-        e(i) = x(i) - data.truth[k * N + i];
-        if (Model::kAngleStates[i]) e(i) = WrapAngle(e(i));
-        if (!std::isfinite(e(i))) truth_ok = false;
-      }
-      double nees = nan;
-      if (truth_ok) {
-        const Eigen::LLT<StateCov> llt(P);
-        if (llt.info() == Eigen::Success) {
-          nees = e.dot(llt.solve(e));
-          nees_sum += nees;
-          ++nees_count;
-        }
-        for (int i = 0; i < N; ++i) {
-          sq_err[i] += e(i) * e(i);
-          abs_err[i] += std::abs(e(i));
-        }
-      }
-      for (int i = 0; i < N; ++i) out_row.push_back(e(i));
-      out_row.push_back(nees);
-    }
-    out.rows.push_back(std::move(out_row));
+    if (!WithinDivergenceGuard<N>(rec.x, rec.P, spec.max_cov_trace, &why)) return fail(k, why);
+    if (smoother) rec.step = smoother->OnRow();
+    records.push_back(rec);
     ++s.steps;
     return true;
   };
   ForEachStep<M>(spec, data, predict, row);
 
-  if (data.has_truth && s.steps > 0) {
-    for (int i = 0; i < N; ++i) {
-      s.rmse.push_back(std::sqrt(sq_err[i] / s.steps));
-      s.mae.push_back(abs_err[i] / s.steps);
-    }
-  }
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
   ChiSquareBounds95(s.updates, M, s.nis_bounds95);
-  s.mean_nees = nees_count ? nees_sum / nees_count : nan;
-  ChiSquareBounds95(nees_count, N, s.nees_bounds95);
   if (adapter) s.adapt_clips = adapter->clip_count();
   s.final_q.assign(Q.data(), Q.data() + N * N);  // symmetric: storage order irrelevant
   s.final_r.assign(R.data(), R.data() + M * M);
-  s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  s.us_per_step = s.steps ? 1e6 * s.wall_s / s.steps : 0.0;
+  auto timing = [&](FilterSummary* summary) {
+    summary->wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary->us_per_step = summary->steps ? 1e6 * summary->wall_s / summary->steps : 0.0;
+  };
+  auto no_lag_one = [](size_t) { return static_cast<const StateCov*>(nullptr); };
+  if (!smoother) {
+    EmitRows<Model, Meas>(records, data, layout, no_lag_one, &out.rows, &s);
+  } else {
+    timing(&s);  // the forward pass's, copied into s.forward
+    SmoothRecords<Model, Meas>(data, layout, &*smoother, &records, &out);
+  }
+  timing(&s);
   return out;
 }
 

@@ -8,6 +8,12 @@ namespace estlab {
 
 bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* error) {
   if (!spec.transition.IsValid(error)) return false;
+  if (spec.smooth && spec.smoother_trajectories < 2) {
+    if (error != nullptr)
+      *error = "smoother-trajectories: must be at least 2, got " +
+               std::to_string(spec.smoother_trajectories);
+    return false;
+  }
   if (!spec.adapt.rule.empty()) {
     if (!std::holds_alternative<SigmaPointOptions>(spec.filter)) {
       if (error != nullptr) *error = "adapt: needs a sigma-point filter (ukf, ckf, ghkf)";
@@ -16,6 +22,14 @@ bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* er
     if (!spec.adapt.IsValid(error)) return false;
   }
   return std::visit([&](const auto& o) { return o.IsValidFor(state_dim, error); }, spec.filter);
+}
+
+std::string SmootherName(const std::string& filter_name) {
+  if (filter_name == "kf") return "rts";
+  if (filter_name == "ekf") return "erts";
+  if (filter_name == "ukf") return "urts";
+  if (filter_name == "pf") return "pf-bs";
+  return filter_name + "-rts";  // iekf-rts, ckf-rts, ghkf-rts
 }
 
 void ChiSquareBounds95(long steps, int dim, double bounds[2]) {

@@ -4,6 +4,7 @@
 #define ESTLAB_RUN_FILTER_SPEC_H_
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,12 @@ struct FilterSpec {
   bool full_cov = false;  // write every covariance entry, not just the diagonal
   // Divergence guard: stop when trace(P) exceeds this.
   double max_cov_trace = 1e12;
+
+  // `estlab smooth`: the rows carry the smoothed estimates of the filter's
+  // smoother (smoother_recorder.h); the particle smoother draws
+  // smoother_trajectories backward trajectories.
+  bool smooth = false;
+  int smoother_trajectories = 100;
 };
 
 // Measurements (and optional truth and input) on a time grid.
@@ -80,6 +87,9 @@ struct FilterSummary {
   std::string message;
   long adapt_clips = 0;  // adaptive: eigenvalue clips applied to keep Q, R SPD
   std::vector<double> final_q, final_r;
+  // `estlab smooth`: the forward filter's summary (this one's rmse, mae and
+  // NEES are the smoother's; its likelihood and NIS are the filter's).
+  std::shared_ptr<const FilterSummary> forward;
 };
 
 struct FilterRunOutput {
@@ -93,6 +103,10 @@ struct FilterRunOutput {
 // (sigma-point filters only), with *error set when false. Every message
 // starts with the option key it is about ("alpha: must be > 0 ...").
 bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* error);
+
+// The smoother of a filter's Name(): rts, erts, iekf-rts, urts, ckf-rts,
+// ghkf-rts, pf-bs.
+std::string SmootherName(const std::string& filter_name);
 
 // Two-sided 95 % bounds of the K-step time average of a d-dimensional
 // chi-square statistic: K * mean ~ chi2(K d).

@@ -90,7 +90,7 @@ RtsSmoother<N> SmoothWith(Filter<Model, Meas>& filter, const LinearData<N, M>& d
     if (k > 0) {
       filter.SetInput(d.u[k - 1]);
       EXPECT_EQ(filter.Predict(d.t(k - 1), d.t(k), d.Q), FilterStatus::kOk);
-      Mat<N, N> C;
+      Mat<N, N> C = Mat<N, N>::Zero();
       EXPECT_TRUE(filter.PredictCrossCov(&C));
       rts.AddPredicted(filter.mean(), filter.cov(), C);
     }
@@ -100,7 +100,7 @@ RtsSmoother<N> SmoothWith(Filter<Model, Meas>& filter, const LinearData<N, M>& d
     rts.AddFiltered(filter.mean(), filter.cov());
   }
   std::string why;
-  EXPECT_TRUE(rts.Smooth(&why)) << why;
+  EXPECT_TRUE(rts.Smooth(&why, LagOne::kCompute)) << why;
   return rts;
 }
 
@@ -174,7 +174,16 @@ TEST(RtsSmoother, RefusesAnInconsistentRecordingAndASingularPrediction) {
   rts.AddFiltered(Vec<double, 2>::Zero(), Mat<2, 2>::Identity());
   rts.AddFiltered(Vec<double, 2>::Zero(), Mat<2, 2>::Identity());
   EXPECT_FALSE(rts.Smooth(&why));
-  EXPECT_NE(why.find("need 1 predictions, got 0"), std::string::npos) << why;
+  EXPECT_NE(why.find("step 1 has no prediction from step 0"), std::string::npos) << why;
+  // A prediction whose update never came is dropped before smoothing.
+  rts.Clear();
+  rts.AddFiltered(Vec<double, 2>::Zero(), Mat<2, 2>::Identity());
+  rts.AddPredicted(Vec<double, 2>::Zero(), Mat<2, 2>::Identity(), Mat<2, 2>::Zero());
+  EXPECT_FALSE(rts.Smooth(&why));
+  EXPECT_NE(why.find("the last prediction has no filtered belief"), std::string::npos) << why;
+  rts.DropUnfinishedStep();
+  EXPECT_EQ(rts.filtered_steps(), 1u);
+  EXPECT_TRUE(rts.Smooth(&why)) << why;
   rts.Clear();
   rts.AddFiltered(Vec<double, 2>::Zero(), Mat<2, 2>::Identity());
   rts.AddPredicted(Vec<double, 2>::Zero(), Mat<2, 2>::Zero(), Mat<2, 2>::Zero());
