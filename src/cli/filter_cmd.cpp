@@ -250,6 +250,11 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
     if (spec.smoother_trajectories < 2)
       throw InputError("--smoother-trajectories must be at least 2, got " +
                        std::to_string(spec.smoother_trajectories));
+    // The particle smoother weighs by the transition density: a fixed Q must
+    // be positive definite (a white-noise-acceleration Q is checked per step).
+    if (spec.kind() == FilterKind::kPf && !spec.q_white_accel)
+      CheckCovariance(spec.q, int(model.states.size()),
+                      "Q (the particle smoother needs a positive definite process noise)", false);
   }
   const FilterData data =
       LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),

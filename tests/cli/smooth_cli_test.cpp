@@ -1,0 +1,145 @@
+// `estlab smooth` end to end: every filter's smoother from the command line,
+// the smoothed rows against the filter's own (the last step's smoothed
+// belief is the filtered one), the printed RMSE against the errors written,
+// the JSON layout, bad input (exit 2, no file) and divergence (exit 1, the
+// rows before kept).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "cli_test_util.h"
+
+namespace estlab::testing {
+namespace {
+
+const std::string kSmoothArgs =
+    "smooth" + std::string(kPendulumFilter).substr(std::string("filter").size()) + "--data d.csv ";
+const std::string kFilterArgs = std::string(kPendulumFilter) + "--data d.csv ";
+
+std::vector<double> Fields(const std::string& line) {
+  std::vector<double> v;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ','))
+    v.push_back(cell.empty() ? std::nan("") : std::stod(cell));
+  return v;
+}
+
+// The number after the last `"rmse": {"theta": ` (the smoother's; the
+// forward filter's nested object comes first).
+double LastRmseTheta(const std::string& json) {
+  const std::string key = "\"rmse\": {\"theta\": ";
+  const size_t at = json.rfind(key);
+  return at == std::string::npos ? std::nan("") : std::stod(json.substr(at + key.size()));
+}
+
+TEST(SmoothCli, EverySmootherEndsOnItsFilterAndPrintsTheRmseItWrites) {
+  TempDir dir;
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
+  const std::pair<const char*, const char*> kinds[] = {
+      {"kf", "rts"},         {"ekf", "erts"},         {"iekf", "iekf-rts"}, {"ukf", "urts"},
+      {"ckf", "ckf-rts"},    {"ghkf", "ghkf-rts"},    {"pf", "pf-bs"}};
+  for (const auto& [filter, smoother] : kinds) {
+    const std::string extra = std::string(filter) == "pf" ? "--particles 500 " : "";
+    const RunResult f =
+        RunEstlab(kFilterArgs + "--filter " + filter + " " + extra + "--out f.csv", dir.path());
+    ASSERT_EQ(f.exit_code, 0) << filter << ": " << f.err;
+    const RunResult s = RunEstlab(
+        kSmoothArgs + "--filter " + filter + " " + extra + "--out s.csv --json", dir.path());
+    ASSERT_EQ(s.exit_code, 0) << filter << ": " << s.err;
+    EXPECT_NE(s.out.find("\"smoother\": \"" + std::string(smoother) + "\""), std::string::npos)
+        << s.out;
+    EXPECT_NE(s.out.find("\"filter\": {\"filter\": \"" + std::string(filter) + "\""),
+              std::string::npos)
+        << s.out;
+    const auto f_lines = SplitLines(ReadFile(dir.File("f.csv")));
+    const auto s_lines = SplitLines(ReadFile(dir.File("s.csv")));
+    ASSERT_EQ(s_lines.size(), 402u) << filter;
+    EXPECT_EQ(s_lines[0], "t,theta_est,omega_est,theta_var,omega_var,theta_err,omega_err,nees");
+    // RMSE of theta from the written errors = the printed one.
+    double sq = 0.0;
+    for (size_t k = 1; k < s_lines.size(); ++k) sq += std::pow(Fields(s_lines[k])[5], 2);
+    EXPECT_NEAR(std::sqrt(sq / 401.0), LastRmseTheta(s.out), 1e-9 * LastRmseTheta(s.out))
+        << filter;
+    if (std::string(filter) == "pf") continue;  // pf-bs' last step is a sample mean
+    // The last smoothed belief is the filtered one (x^s_K = x_K, P^s_K = P_K).
+    const auto fl = Fields(f_lines.back()), sl = Fields(s_lines.back());
+    for (int i = 1; i <= 4; ++i) EXPECT_NEAR(sl[i], fl[i], 1e-12 * (1 + std::abs(fl[i]))) << i;
+    // Smoothing uses later data: its angle error is below the filter's.
+    const RunResult fj =
+        RunEstlab(kFilterArgs + "--filter " + filter + " " + extra + "--json", dir.path());
+    EXPECT_LT(LastRmseTheta(s.out), LastRmseTheta(fj.out))
+        << filter;
+  }
+}
+
+TEST(SmoothCli, FullCovWritesTheLagOneCovariances) {
+  TempDir dir;
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
+  const RunResult s = RunEstlab(kSmoothArgs + "--filter ukf --full-cov --out s.csv", dir.path());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_NE(s.out.find("smoother      urts (forward filter ukf)"), std::string::npos) << s.out;
+  const auto lines = SplitLines(ReadFile(dir.File("s.csv")));
+  EXPECT_EQ(lines[0],
+            "t,theta_est,omega_est,theta_var,omega_var,cov_theta_omega,lag1_theta_theta,"
+            "lag1_theta_omega,lag1_omega_theta,lag1_omega_omega,theta_err,omega_err,nees");
+  // Cov(theta_k, theta_k+1) is close to Var(theta_k) at dt 0.0125 and
+  // bounded by Cauchy-Schwarz; the last row has no next step.
+  const auto first = Fields(lines[1]), next = Fields(lines[2]);
+  EXPECT_GT(first[6], 0.5 * first[3]);
+  EXPECT_LE(first[6] * first[6], first[3] * next[3] * (1 + 1e-9));
+  const auto last = Fields(lines.back());
+  for (int i = 6; i <= 9; ++i) EXPECT_TRUE(std::isnan(last[i])) << i;
+}
+
+TEST(SmoothCli, BadInputExitsTwoWithoutOutput) {
+  TempDir dir;
+  ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
+  const std::pair<std::string, std::string> cases[] = {
+      {kSmoothArgs + "--filter pf --smoother-trajectories 1 --out e.csv",
+       "--smoother-trajectories must be at least 2, got 1"},
+      {kSmoothArgs + "--filter bogus --out e.csv", "bogus"},
+      {"smooth --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out "
+       "e.csv",
+       "nothere.csv"},
+      {"smooth --model pendulum --measure sin --filter pf --data d.csv --q-diag 0,1e-4 "
+       "--r-diag 0.1 --out e.csv",
+       "positive definite"},
+      {kSmoothArgs + "--filter ukf --out d.csv", "d.csv"},
+  };
+  for (const auto& [args, expect] : cases) {
+    const RunResult r = RunEstlab(args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: error: "), std::string::npos) << args;
+    EXPECT_NE(r.err.find(expect), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(dir.Exists("e.csv")) << args;
+  }
+  const RunResult help = RunEstlab("smooth --help", dir.path());
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("Examples:"), std::string::npos);
+  EXPECT_NE(help.out.find("--smoother-trajectories"), std::string::npos);
+}
+
+TEST(SmoothCli, DivergenceExitsOneAndSmoothsTheRowsBefore) {
+  TempDir dir;
+  ASSERT_EQ(RunEstlab("simulate --model van-der-pol --x0 x=2 --t-end 2 --dt 0.01 --measure x "
+                      "--meas-noise-var 0.01 --out v.csv",
+                      dir.path())
+                .exit_code,
+            0);
+  const std::string model =
+      "--model van-der-pol --measure x --filter ekf --data v.csv --integrator euler --x0 x=2 "
+      "--q-diag 1e-4,1e-4 --r-diag 0.01 ";
+  const RunResult f = RunEstlab("filter " + model + "--out f.csv", dir.path());
+  const RunResult s = RunEstlab("smooth " + model + "--out s.csv", dir.path());
+  EXPECT_EQ(s.exit_code, 1) << s.err;
+  EXPECT_NE(s.err.find("stopped at step"), std::string::npos) << s.err;
+  const auto f_lines = SplitLines(ReadFile(dir.File("f.csv")));
+  const auto s_lines = SplitLines(ReadFile(dir.File("s.csv")));
+  EXPECT_GT(s_lines.size(), 1u);
+  EXPECT_EQ(s_lines.size(), f_lines.size());
+}
+
+}  // namespace
+}  // namespace estlab::testing
