@@ -47,8 +47,10 @@ namespace estlab {
 using ParticleCloud = Eigen::MatrixXd;  // n x N_p, one particle per column
 
 // v_i proportional to w_i N(x_next; m_i, L L^T), normalised to sum 1 (the
-// backward weights of FFBSi). `weights` sum to 1; L is lower triangular.
-// False when every v_i underflows (x_next is far from every m_i).
+// backward weights of FFBSi), computed in logs so that a x_next far from every
+// m_i still gives the nearest its weight. `weights` sum to 1; L is lower
+// triangular. False when no v_i is positive and finite (no positive weight,
+// or a non-finite particle).
 bool BackwardWeights(const ParticleCloud& means, const std::vector<double>& weights,
                      const Eigen::MatrixXd& L, const Eigen::VectorXd& x_next,
                      std::vector<double>* v);
@@ -97,7 +99,7 @@ class ParticleSmoother {
   size_t filtered_steps() const { return steps_.size(); }
 
   // Draws M trajectories (one Rng stream from `seed`) and their moments.
-  // False with the step in *why when the backward weights underflow.
+  // False with the step in *why when no backward weight is usable.
   bool Smooth(int trajectories, uint64_t seed, std::string* why);
 
   size_t size() const { return mean_.size(); }
@@ -144,8 +146,8 @@ bool ParticleSmoother<N>::Smooth(int trajectories, uint64_t seed, std::string* w
       const Step& s = steps_[k];
       const Eigen::VectorXd x_next = steps_[k + 1].particles.col(b[k + 1]);
       if (!BackwardWeights(s.means, s.weights, s.L, x_next, &v)) {
-        *why = "particle smoother: every backward weight underflowed at step " +
-               std::to_string(k) + " (the next step's particle is far from every prediction)";
+        *why = "particle smoother: no backward weight is positive and finite at step " +
+               std::to_string(k);
         return false;
       }
       b[k] = uint32_t(SampleIndex(v, rng.Uniform()));
