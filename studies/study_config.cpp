@@ -88,9 +88,15 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
     const SectionValues& v = filter_values.back();
     FilterConfig f;
     f.name = s->name;
-    if (!v.Has("kind")) v.FailSection("'kind' is required (kf, ekf, iekf, ukf, ckf, ghkf, pf)");
+    if (!v.Has("kind"))
+      v.FailSection(
+          "'kind' is required (kf, ekf, iekf, ukf, ckf, ghkf, pf, or a smoother: rts, erts, "
+          "iekf-rts, urts, ckf-rts, ghkf-rts, pf-bs)");
     f.kind = v.Get("kind")->text;
-    Checked(*v.Get("kind"), err, [](const std::string& t) { return ParseFilterKind(t); });
+    Checked(*v.Get("kind"), err, [](const std::string& t) {
+      const std::string filter = FilterOfSmoother(t);
+      return ParseFilterKind(filter.empty() ? t : filter);
+    });
     f.description = f.kind;
     for (const Entry& e : s->entries) {
       if (e.key == "kind" || e.key == "scenarios") continue;

@@ -62,7 +62,11 @@
 //   word or number, else KEYi).
 //
 //   [filter.NAME]
-//   kind = ukf                       # kf | ekf | iekf | ukf | ckf | ghkf | pf
+//   kind = ukf                       # kf | ekf | iekf | ukf | ckf | ghkf | pf, or a smoother:
+//                                    # rts | erts | iekf-rts | urts | ckf-rts | ghkf-rts | pf-bs
+//                                    # (the filter forward, its smoother backward; pf-bs: 100
+//                                    # trajectories; metrics are the smoothed estimates', the
+//                                    # NLL/NIS columns empty: the likelihood is the filter's)
 //   integrator = euler               # process model, and every other option of
 //   alpha = 1e-3                     # `estlab filter` that is not about the data
 //   particles = 1000                 # or the model: substeps, method, rtol, atol,

@@ -53,8 +53,10 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   }
   add("p0", p0, nullptr);
   add("input", FormatDouble(sc.truth.input), scen.Get("input"));
+  // A smoother kind (urts, ...) runs its filter with spec.smooth set below.
   const Value* kind = filt.Get("kind");
-  add("filter", kind->text, kind);
+  const std::string smoothed = FilterOfSmoother(kind->text);
+  add("filter", smoothed.empty() ? kind->text : smoothed, kind);
   for (const Entry& e : filt.section().entries) {
     if (e.key == "kind" || e.key == "scenarios" || e.key == "description") continue;
     add(e.key, filt.Get(e.key)->text, filt.Get(e.key));
@@ -120,6 +122,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   combo.noise = ni;
   try {
     combo.spec = BuildFilterSpec(settings, model);
+    combo.spec.smooth = !smoothed.empty();
   } catch (const KeyError& e) {
     const auto it = origin.find(e.key());
     if (it != origin.end() && it->second != nullptr)

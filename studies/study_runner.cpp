@@ -388,6 +388,7 @@ std::string TuneNoise(StudyConfig* config, int jobs) {
         FilterSpec tuned = r.tuned_spec;
         tuned.has_t0 = cb.spec.has_t0;
         tuned.t0 = cb.spec.t0;
+        tuned.smooth = cb.spec.smooth;  // a smoother kind tunes its filter, then smooths
         cb.spec = tuned;
       } else {
         cb.tune_failure = failure;

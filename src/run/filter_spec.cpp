@@ -32,6 +32,12 @@ std::string SmootherName(const std::string& filter_name) {
   return filter_name + "-rts";  // iekf-rts, ckf-rts, ghkf-rts
 }
 
+std::string FilterOfSmoother(const std::string& name) {
+  for (const char* filter : {"kf", "ekf", "iekf", "ukf", "ckf", "ghkf", "pf"})
+    if (SmootherName(filter) == name) return filter;
+  return "";
+}
+
 void ChiSquareBounds95(long steps, int dim, double bounds[2]) {
   if (steps <= 0 || dim <= 0) {
     bounds[0] = bounds[1] = 0.0;

@@ -107,6 +107,8 @@ bool IsValidFilterOptions(const FilterSpec& spec, int state_dim, std::string* er
 // The smoother of a filter's Name(): rts, erts, iekf-rts, urts, ckf-rts,
 // ghkf-rts, pf-bs.
 std::string SmootherName(const std::string& filter_name);
+// The inverse: "ukf" for "urts"; "" when `name` is no smoother's.
+std::string FilterOfSmoother(const std::string& name);
 
 // Two-sided 95 % bounds of the K-step time average of a d-dimensional
 // chi-square statistic: K * mean ~ chi2(K d).

@@ -191,6 +191,33 @@ TEST_F(StudyCli, FiguresWriteScriptsDataAndImages) {
 
 // Bad configurations: exit 2, "estlab: error: FILE:LINE: ..." naming the key,
 // and no results folder (no run started). These need no filters.
+// Issue 13: smoother kinds sit beside their filters in a study; on the same
+// runs (same truth, same data) the smoothed angle error is below the filter's.
+TEST_F(StudyCli, SmootherKindsRunBesideTheirFilters) {
+  const std::string smoothers =
+      "[filter.urts]\nkind = urts\nintegrator = rk4\nalpha = 0.5\n\n"
+      "[filter.pfbs]\nkind = pf-bs\nintegrator = rk4\nparticles = 200\n\n[noise.oracle]";
+  WriteText(dir_.File("s.ini"), Replace(TinyStudy(6, 60), "[noise.oracle]", smoothers));
+  const auto r = RunEstlab("study s.ini --out o --quiet", dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::map<std::string, double> rmse_theta;  // filter -> mean over runs (oracle noise)
+  std::map<std::string, int> count;
+  const auto lines = SplitLines(RunsCsv(dir_, "o"));
+  for (size_t i = 1; i < lines.size(); ++i) {
+    std::vector<std::string> c;
+    std::stringstream ss(lines[i]);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c[5], "ok") << lines[i];
+    if (c[2] != "oracle") continue;
+    rmse_theta[c[1]] += std::stod(c[6]) / 6.0;
+    ++count[c[1]];
+  }
+  ASSERT_EQ(count["urts"], 6);
+  ASSERT_EQ(count["pfbs"], 6);
+  EXPECT_LT(rmse_theta["urts"], rmse_theta["ukf"]);
+  EXPECT_LT(rmse_theta["pfbs"], rmse_theta["pf"]);
+}
+
 TEST(StudyCliErrors, BadConfigStopsBeforeAnyRun) {
   TempDir dir;
   struct Case {
