@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 #include "cli_test_util.h"
@@ -72,6 +73,37 @@ TEST(SmoothCli, EverySmootherEndsOnItsFilterAndPrintsTheRmseItWrites) {
     EXPECT_LT(LastRmseTheta(s.out), LastRmseTheta(fj.out))
         << filter;
   }
+}
+
+// Rows at one time share one smoothed belief (it conditions on both
+// measurements); a missing measurement is smoothed through; a prior before
+// the first row is a step of its own; the last row is the filtered belief.
+TEST(SmoothCli, RepeatedTimesMissingValuesAndAnEarlierPrior) {
+  TempDir dir;
+  {
+    std::ofstream f(dir.File("lab.csv"));
+    f << "t,z_theta\n0,0.5\n0.01,0.49\n0.01,0.51\n0.02,\n0.03,0.47\n0.05,0.46\n";
+  }
+  const std::string args =
+      "--model pendulum --measure angle --filter ekf --data lab.csv --x0 theta=0.4 "
+      "--q-diag 1e-4,1e-2 --r-diag 0.01 --t0 -0.02 ";
+  ASSERT_EQ(RunEstlab("filter " + args + "--out f.csv", dir.path()).exit_code, 0);
+  const RunResult s = RunEstlab("smooth " + args + "--out s.csv", dir.path());
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const auto f_lines = SplitLines(ReadFile(dir.File("f.csv")));
+  const auto s_lines = SplitLines(ReadFile(dir.File("s.csv")));
+  ASSERT_EQ(s_lines.size(), 7u);
+  EXPECT_EQ(s_lines[2], s_lines[3]);  // t = 0.01 twice: one smoothed belief
+  EXPECT_NE(f_lines[2].substr(0, 30), f_lines[3].substr(0, 30));  // the filter's differ
+  // t = 0.02 has no measurement: the later ones make its smoothed angle
+  // variance strictly smaller than the filter's prediction variance.
+  EXPECT_LT(Fields(s_lines[4])[3], 0.9 * Fields(f_lines[4])[3]);
+  const auto fl = Fields(f_lines.back()), sl = Fields(s_lines.back());
+  for (int i = 1; i <= 4; ++i) EXPECT_NEAR(sl[i], fl[i], 1e-12 * (1 + std::abs(fl[i]))) << i;
+  // Every smoothed variance is at most the filtered one.
+  for (size_t k = 1; k < s_lines.size(); ++k)
+    for (int i = 3; i <= 4; ++i)
+      EXPECT_LE(Fields(s_lines[k])[i], Fields(f_lines[k])[i] * (1 + 1e-12)) << k << " " << i;
 }
 
 TEST(SmoothCli, FullCovWritesTheLagOneCovariances) {
