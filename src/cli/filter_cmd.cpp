@@ -286,7 +286,9 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
 
 }  // namespace
 
-int RunFilterCommand(const std::vector<std::string>& args) { return RunFilterOrSmooth(args, false); }
+int RunFilterCommand(const std::vector<std::string>& args) {
+  return RunFilterOrSmooth(args, false);
+}
 int RunSmoothCommand(const std::vector<std::string>& args) { return RunFilterOrSmooth(args, true); }
 
 }  // namespace estlab::cli

@@ -82,9 +82,10 @@ class ParticleSmoother {
   bool AddPredicted(const ParticleCloud& means, const Mat<N, N>& Q, std::string* why) {
     const Eigen::LLT<Mat<N, N>> llt(Q);
     if (llt.info() != Eigen::Success || !Q.allFinite()) {
-      *why = "the particle smoother needs a positive definite process noise Q (the density of "
-             "the transition); give every state some noise, e.g. --q-white-accel or a Q "
-             "diagonal with no zero";
+      *why =
+          "the particle smoother needs a positive definite process noise Q (the density of "
+          "the transition); give every state some noise, e.g. --q-white-accel or a Q "
+          "diagonal with no zero";
       return false;
     }
     steps_.back().means = means;

@@ -1,6 +1,7 @@
 // Runs one filter over a dataset: predict to each measurement time, update
 // when the row has a measurement, record the per-step diagnostics and the
-// summary metrics; with spec.smooth, then its smoother's backward pass. Include only from the generated per-model units (models/model_list.cmake).
+// summary metrics; with spec.smooth, then its smoother's backward pass. Include only from the
+// generated per-model units (models/model_list.cmake).
 //
 // Per step k (time t_k):
 //   Q_k = Q, or qc * Q_wa(t_k - t_{k-1})       (white-noise acceleration)
@@ -194,8 +195,9 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
   using StateCov = Mat<Model::kStateDim, Model::kStateDim>;
   FilterSummary& s = out->summary;
   auto forward = std::make_shared<FilterSummary>(s);
-  EmitRows<Model, Meas>(*records, data, layout, [](size_t) -> const StateCov* { return nullptr; },
-                        nullptr, forward.get());
+  EmitRows<Model, Meas>(
+      *records, data, layout, [](size_t) -> const StateCov* { return nullptr; }, nullptr,
+      forward.get());
   s.filter = SmootherName(forward->filter);
   s.forward = forward;
   if (records->empty()) return;
@@ -212,8 +214,8 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
     r.x = smoother->mean(r.step);
     r.P = smoother->cov(r.step);
   }
-  EmitRows<Model, Meas>(*records, data, layout,
-                        [&](size_t k) { return smoother->lag_one(k); }, &out->rows, &s);
+  EmitRows<Model, Meas>(
+      *records, data, layout, [&](size_t k) { return smoother->lag_one(k); }, &out->rows, &s);
 }
 
 template <class Model, class Meas>

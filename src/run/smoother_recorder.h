@@ -74,11 +74,15 @@ class SmootherRecorder {
   // After a row's update (or none); returns the row's step index.
   size_t OnRow() {
     if (pf_ != nullptr) {
-      if (pending_) ps_.AddFiltered(pf_->particles(), pf_->weights());
-      else ps_.ReplaceFiltered(pf_->particles(), pf_->weights());
+      if (pending_)
+        ps_.AddFiltered(pf_->particles(), pf_->weights());
+      else
+        ps_.ReplaceFiltered(pf_->particles(), pf_->weights());
     } else {
-      if (pending_) rts_.AddFiltered(filter_->mean(), filter_->cov());
-      else rts_.ReplaceFiltered(filter_->mean(), filter_->cov());
+      if (pending_)
+        rts_.AddFiltered(filter_->mean(), filter_->cov());
+      else
+        rts_.ReplaceFiltered(filter_->mean(), filter_->cov());
     }
     pending_ = false;
     return (pf_ != nullptr ? ps_.filtered_steps() : rts_.filtered_steps()) - 1;
@@ -99,9 +103,7 @@ class SmootherRecorder {
   // The smoothed mean and covariance of step k (the particle smoother's is
   // the diagonal of its trajectories' sample variances).
   Vec<double, N> mean(size_t k) const { return pf_ ? ps_.mean(k) : rts_.mean(k); }
-  StateCov cov(size_t k) const {
-    return pf_ ? StateCov(ps_.var(k).asDiagonal()) : rts_.cov(k);
-  }
+  StateCov cov(size_t k) const { return pf_ ? StateCov(ps_.var(k).asDiagonal()) : rts_.cov(k); }
   size_t steps() const { return pf_ ? ps_.size() : rts_.size(); }
   // Cov(x_k, x_{k+1} | all data) (RTS with lag_one only).
   const StateCov* lag_one(size_t k) const {

@@ -86,6 +86,14 @@ inline constexpr const char* kPendulumSimulate =
 #define ESTLAB_TEST_PENDULUM_FILTER                                         \
   "filter --model pendulum --param g=9.8 --measure sin --integrator euler " \
   "--x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 "
+// Van der Pol (mu = 1000) data on which an explicit-Euler EKF at dt 0.01
+// diverges: the divergence tests of `estlab filter` and `estlab smooth`.
+inline constexpr const char* kDivergingVanDerPolSimulate =
+    "simulate --model van-der-pol --x0 x=2 --t-end 2 --dt 0.01 --measure x "
+    "--meas-noise-var 0.01 --out v.csv";
+inline constexpr const char* kDivergingVanDerPolFilter =
+    "--model van-der-pol --measure x --filter ekf --data v.csv --integrator euler --x0 x=2 "
+    "--q-diag 1e-4,1e-4 --r-diag 0.01 ";
 inline constexpr const char* kPendulumFilter = ESTLAB_TEST_PENDULUM_FILTER "--r-diag 0.1 ";
 // The same up to the noise R (add --r-diag), on d.csv.
 inline constexpr const char* kFilterWithoutR = ESTLAB_TEST_PENDULUM_FILTER "--data d.csv ";

@@ -128,15 +128,9 @@ TEST(FilterCli, DivergenceExitsOneAndKeepsRows) {
   // Van der Pol (mu = 1000) with an explicit Euler process model at dt 0.01
   // is violently unstable: the filter must stop, name the step and time, and
   // keep the rows before it.
-  ASSERT_EQ(RunEstlab("simulate --model van-der-pol --x0 x=2 --t-end 2 --dt 0.01 --measure x "
-                      "--meas-noise-var 0.01 --out v.csv",
-                      dir.path())
-                .exit_code,
-            0);
-  const RunResult r = RunEstlab(
-      "filter --model van-der-pol --measure x --filter ekf --data v.csv --integrator euler "
-      "--x0 x=2 --q-diag 1e-4,1e-4 --r-diag 0.01 --out e.csv",
-      dir.path());
+  ASSERT_EQ(RunEstlab(kDivergingVanDerPolSimulate, dir.path()).exit_code, 0);
+  const RunResult r =
+      RunEstlab(std::string("filter ") + kDivergingVanDerPolFilter + "--out e.csv", dir.path());
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("step"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("t = "), std::string::npos) << r.err;

@@ -22,8 +22,7 @@ std::vector<double> Fields(const std::string& line) {
   std::vector<double> v;
   std::stringstream ss(line);
   std::string cell;
-  while (std::getline(ss, cell, ','))
-    v.push_back(cell.empty() ? std::nan("") : std::stod(cell));
+  while (std::getline(ss, cell, ',')) v.push_back(cell.empty() ? std::nan("") : std::stod(cell));
   return v;
 }
 
@@ -39,8 +38,8 @@ TEST(SmoothCli, EverySmootherEndsOnItsFilterAndPrintsTheRmseItWrites) {
   TempDir dir;
   ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
   const std::pair<const char*, const char*> kinds[] = {
-      {"kf", "rts"},         {"ekf", "erts"},         {"iekf", "iekf-rts"}, {"ukf", "urts"},
-      {"ckf", "ckf-rts"},    {"ghkf", "ghkf-rts"},    {"pf", "pf-bs"}};
+      {"kf", "rts"},      {"ekf", "erts"},      {"iekf", "iekf-rts"}, {"ukf", "urts"},
+      {"ckf", "ckf-rts"}, {"ghkf", "ghkf-rts"}, {"pf", "pf-bs"}};
   for (const auto& [filter, smoother] : kinds) {
     const std::string extra = std::string(filter) == "pf" ? "--particles 500 " : "";
     const RunResult f =
@@ -61,8 +60,7 @@ TEST(SmoothCli, EverySmootherEndsOnItsFilterAndPrintsTheRmseItWrites) {
     // RMSE of theta from the written errors = the printed one.
     double sq = 0.0;
     for (size_t k = 1; k < s_lines.size(); ++k) sq += std::pow(Fields(s_lines[k])[5], 2);
-    EXPECT_NEAR(std::sqrt(sq / 401.0), LastRmseTheta(s.out), 1e-9 * LastRmseTheta(s.out))
-        << filter;
+    EXPECT_NEAR(std::sqrt(sq / 401.0), LastRmseTheta(s.out), 1e-9 * LastRmseTheta(s.out)) << filter;
     if (std::string(filter) == "pf") continue;  // pf-bs' last step is a sample mean
     // The last smoothed belief is the filtered one (x^s_K = x_K, P^s_K = P_K).
     const auto fl = Fields(f_lines.back()), sl = Fields(s_lines.back());
@@ -70,8 +68,7 @@ TEST(SmoothCli, EverySmootherEndsOnItsFilterAndPrintsTheRmseItWrites) {
     // Smoothing uses later data: its angle error is below the filter's.
     const RunResult fj =
         RunEstlab(kFilterArgs + "--filter " + filter + " " + extra + "--json", dir.path());
-    EXPECT_LT(LastRmseTheta(s.out), LastRmseTheta(fj.out))
-        << filter;
+    EXPECT_LT(LastRmseTheta(s.out), LastRmseTheta(fj.out)) << filter;
   }
 }
 
@@ -155,14 +152,8 @@ TEST(SmoothCli, BadInputExitsTwoWithoutOutput) {
 
 TEST(SmoothCli, DivergenceExitsOneAndSmoothsTheRowsBefore) {
   TempDir dir;
-  ASSERT_EQ(RunEstlab("simulate --model van-der-pol --x0 x=2 --t-end 2 --dt 0.01 --measure x "
-                      "--meas-noise-var 0.01 --out v.csv",
-                      dir.path())
-                .exit_code,
-            0);
-  const std::string model =
-      "--model van-der-pol --measure x --filter ekf --data v.csv --integrator euler --x0 x=2 "
-      "--q-diag 1e-4,1e-4 --r-diag 0.01 ";
+  ASSERT_EQ(RunEstlab(kDivergingVanDerPolSimulate, dir.path()).exit_code, 0);
+  const std::string model = kDivergingVanDerPolFilter;
   const RunResult f = RunEstlab("filter " + model + "--out f.csv", dir.path());
   const RunResult s = RunEstlab("smooth " + model + "--out s.csv", dir.path());
   EXPECT_EQ(s.exit_code, 1) << s.err;

@@ -41,8 +41,7 @@ TEST(ParticleSmoother, BackwardWeightsEqualTheFormulaByHand) {
   ParticleCloud m2(2, 2);
   m2 << 0.0, 1.0, 0.0, -0.5;
   const Eigen::Vector2d x(0.4, 0.1);
-  ASSERT_TRUE(
-      BackwardWeights(m2, {0.6, 0.4}, Eigen::MatrixXd(Q.llt().matrixL()), x, &v));
+  ASSERT_TRUE(BackwardWeights(m2, {0.6, 0.4}, Eigen::MatrixXd(Q.llt().matrixL()), x, &v));
   const Eigen::Vector2d d0 = x - m2.col(0), d1 = x - m2.col(1);
   const double v0 = 0.6 * std::exp(-0.5 * d0.dot(Q.inverse() * d0));
   const double v1 = 0.4 * std::exp(-0.5 * d1.dot(Q.inverse() * d1));
@@ -79,8 +78,7 @@ TEST(ParticleSmoother, AgreesWithTheRtsSmootherOnALinearGaussianModel) {
   const Model::Params params;
   const double dt = 0.1;
   const Mat<N, N> F = Mat<N, N>::Identity() + dt * Model::A(params);  // Euler
-  const auto d =
-      testing::MakeLinearData<N, Meas::kDim>(F, dt * Model::B(), Meas::H(), 40, 21);
+  const auto d = testing::MakeLinearData<N, Meas::kDim>(F, dt * Model::B(), Meas::H(), 40, 21);
   auto transition = testing::EulerTransition<Model>(params);
 
   // Reference: ERTS on the same Euler transition (exact for this linear model).
@@ -128,14 +126,16 @@ TEST(ParticleSmoother, AgreesWithTheRtsSmootherOnALinearGaussianModel) {
       sum_z2 += z * z;
       ++count;
       worst_z = std::max(worst_z, std::abs(z));
-      worst_var_ratio = std::max(worst_var_ratio, std::abs(std::log(ps.var(k)(i) / rts.cov(k)(i, i))));
+      worst_var_ratio =
+          std::max(worst_var_ratio, std::abs(std::log(ps.var(k)(i) / rts.cov(k)(i, i))));
     }
   }
-  std::printf("  FFBSi (10^4 particles, %d trajectories) vs RTS over %d means: %d beyond 3 SE, "
-              "RMS z %.2f, largest |z| %.2f, largest |log variance ratio| %.2f\n",
-              kTrajectories, count, outside, std::sqrt(sum_z2 / count), worst_z, worst_var_ratio);
-  EXPECT_LE(outside, count / 20);              // ~0.3 % expected; a wrong smoother is far off
-  EXPECT_LT(std::sqrt(sum_z2 / count), 1.5);   // 1 for independent trajectories
+  std::printf(
+      "  FFBSi (10^4 particles, %d trajectories) vs RTS over %d means: %d beyond 3 SE, "
+      "RMS z %.2f, largest |z| %.2f, largest |log variance ratio| %.2f\n",
+      kTrajectories, count, outside, std::sqrt(sum_z2 / count), worst_z, worst_var_ratio);
+  EXPECT_LE(outside, count / 20);             // ~0.3 % expected; a wrong smoother is far off
+  EXPECT_LT(std::sqrt(sum_z2 / count), 1.5);  // 1 for independent trajectories
   // Sample variances of 100 draws: relative sd sqrt(2/99) = 0.14; 0.6 is > 4 sd.
   EXPECT_LT(worst_var_ratio, 0.6);
 }

@@ -201,7 +201,6 @@ TEST(RtsSmoother, RefusesAnInconsistentRecordingAndASingularPrediction) {
   EXPECT_EQ(rts.mean(0)(1), 2.0);
 }
 
-
 // The pendulum benchmark of Saerkkae & Svensson (Bayesian Filtering and
 // Smoothing, 2nd ed., 2023, the pendulum example of chs. 7-14): the Euler
 // model x1' = x1 + x2 dt, x2' = x2 - g sin(x1) dt + q, g = 9.81, dt = 0.01,
@@ -228,8 +227,8 @@ TEST(RtsSmoother, SaerkkaeSvenssonPendulumBenchmark) {
     std::function<std::unique_ptr<Filter<P, P::Sin>>()> make;
   };
   const std::vector<Case> cases = {
-      {"erts", 0.057, [&] { return std::make_unique<Ekf<P, P::Sin>>(transition.get(), params,
-                                                                    EkfOptions{}); }},
+      {"erts", 0.057,
+       [&] { return std::make_unique<Ekf<P, P::Sin>>(transition.get(), params, EkfOptions{}); }},
       {"urts", 0.037,
        [&] {
          return std::make_unique<SigmaPointFilter<P, P::Sin>>(
