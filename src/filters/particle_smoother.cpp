@@ -10,7 +10,11 @@ bool BackwardWeights(const ParticleCloud& means, const std::vector<double>& weig
   const Eigen::Index n = means.cols();
   v->resize(size_t(n));
   // log v_i = log w_i - |L^-1 (x' - m_i)|^2 / 2 (the Gaussian's constant cancels)
-  Eigen::MatrixXd d = (-means).colwise() + x_next;
+  // d = L^-1 (x' - m_i) for all i. Called M K times per smoothing: the
+  // buffer is kept per thread so that only the first call allocates.
+  thread_local Eigen::MatrixXd d;
+  d.resize(means.rows(), n);
+  d = (-means).colwise() + x_next;
   L.triangularView<Eigen::Lower>().solveInPlace(d);
   double max_log = -std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < n; ++i) {
