@@ -123,6 +123,33 @@ class InnovationLikelihood {
   // True when the process model is CVODES.
   bool UsesCvodes() const { return cvodes_ != nullptr; }
 
+  // EM's M-step (adaptive/em.h) evaluates the filter's own model at single
+  // points: the noise-free process map x -> x- (the KF's linearised,
+  // discretised map; else Phi, fixed-step or CVODES) and the measurement
+  // residual wrap(z - h(x)) (the KF's linearised h).
+  Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1,
+                                  double u) const {
+    if (!kf_) return Propagate<double>(x, t0, t1, u, params_, nullptr);
+    const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
+    if (step == nullptr)  // SetUpKf saw every step of the data
+      throw NumericalError("no KF discretisation for the step " + FormatNumber(t1 - t0));
+    Vec<double, kN> next = x;
+    Mat<kN, kN> P = Mat<kN, kN>::Zero();
+    const Mat<kN, kN> no_noise = Mat<kN, kN>::Zero();
+    KfPredict<Model, kM>(kf_lin_, *step, u, no_noise, &next, &P);
+    return next;
+  }
+  Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x) const {
+    Vec<double, kM> z_pred;
+    if (kf_) {  // h(x*) + H wrap(x - x*), as KfUpdate
+      z_pred = kf_lin_.h_star +
+               kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates);
+    } else {
+      z_pred = Meas::template Eval<double>(x, params_);
+    }
+    return WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
+  }
+
   // CVODES tolerances of the likelihood (the spec's, if tighter).
   static constexpr double kCvodesRtol = 1e-10;
   static constexpr double kCvodesAtol = 1e-12;

@@ -35,11 +35,24 @@ const char* NoiseParamName(NoiseParam param) {
 TunerForm ParseTunerForm(const std::string& name) {
   if (name == "lbfgs") return TunerForm::kLbfgs;
   if (name == "least-squares") return TunerForm::kLeastSquares;
-  throw InputError("--form: unknown form '" + name + "' (expected lbfgs or least-squares)");
+  if (name == "em") return TunerForm::kEm;
+  if (name == "als") return TunerForm::kAls;
+  throw InputError("--form: unknown form '" + name +
+                   "' (expected lbfgs, least-squares, em or als)");
 }
 
 const char* TunerFormName(TunerForm form) {
-  return form == TunerForm::kLbfgs ? "lbfgs" : "least-squares";
+  switch (form) {
+    case TunerForm::kLbfgs:
+      return "lbfgs";
+    case TunerForm::kLeastSquares:
+      return "least-squares";
+    case TunerForm::kEm:
+      return "em";
+    case TunerForm::kAls:
+      return "als";
+  }
+  return "?";
 }
 
 const char* TuneStatusName(TuneStatus status) {
@@ -72,6 +85,21 @@ bool TunerOptions::IsValid(std::string* error) const {
   if (!(log_det_margin > 0)) return fail("log-det margin must be > 0");
   if (r_param == NoiseParam::kWhiteAccel)
     return fail("white-accel applies to the process noise Q only, not to R");
+  if (form == TunerForm::kEm) {
+    if (!(em_tolerance >= 0 && std::isfinite(em_tolerance)))
+      return fail("EM tolerance must be finite and >= 0, got " + FormatNumber(em_tolerance));
+    if (burn_in != 0)
+      return fail("EM maximises the likelihood of every update: burn-in applies to the ml estimator");
+    if (starts != 1) return fail("EM runs from the initial guess only (starts 1)");
+    if (!estimate.empty())
+      return fail("EM estimates Q and R only; physical parameters need the ml estimator");
+  }
+  if (form == TunerForm::kAls) {
+    if (als_lags < 1) return fail("ALS lags must be >= 1, got " + std::to_string(als_lags));
+    if (starts != 1) return fail("ALS runs from the initial guess only (starts 1)");
+    if (!estimate.empty())
+      return fail("ALS estimates Q and R only; physical parameters need the ml estimator");
+  }
   for (double v : log_lower)
     if (std::isnan(v)) return fail("a lower bound is NaN");
   for (double v : log_upper)

@@ -43,6 +43,7 @@
 #define ESTLAB_ADAPTIVE_TUNER_H_
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -59,6 +60,8 @@ const char* NoiseParamName(NoiseParam param);
 enum class TunerForm {
   kLbfgs,         // ceres::GradientProblemSolver, L-BFGS on the NLL
   kLeastSquares,  // ceres::Solver, Levenberg-Marquardt on whitened residuals
+  kEm,            // expectation-maximisation, the smoother as E-step (adaptive/em.h)
+  kAls,           // autocovariance least squares (adaptive/als.h)
 };
 TunerForm ParseTunerForm(const std::string& name);
 const char* TunerFormName(TunerForm form);
@@ -123,6 +126,22 @@ struct TunerOptions {
   // Physical parameters estimated with Q and R (their initial values are the
   // spec's params). Empty: Q and R only.
   std::vector<EstimatedParam> estimate;
+
+  // EM (form kEm): stop when |NLL_i - NLL_{i-1}| <= em_tolerance * |NLL_i|
+  // (max_iterations EM iterations at most); then, with em_compare_ml, run
+  // the L-BFGS form from EM's solution so that the report gives both
+  // optima (they agree on a linear model; the gap shows the E-step's
+  // approximation on a nonlinear one).
+  double em_tolerance = 1e-9;
+  bool em_compare_ml = true;
+  // Called after every EM iteration (1, 2, ...) with its NLL and the change
+  // from the previous one (the CLI prints it on a terminal). May be empty.
+  std::function<void(int iteration, double nll, double change)> progress;
+
+  // ALS (form kAls): the lags 0 .. als_lags - 1 of the innovation
+  // autocovariances fitted; burn_in updates of the suboptimal filter are
+  // left out of them.
+  int als_lags = 10;
 
   // The least-squares form's log-determinant residual sqrt(log det S_k + c):
   // c = log_det_margin * m - min_k log det S_k at the start point (>= 0).
@@ -203,6 +222,15 @@ struct TuneResult {
   double wall_s = 0.0;
   std::vector<TuneStart> starts;
   int best_start = -1;
+
+  // EM (form kEm): the exact NLL at the initial guess and after every
+  // iteration, the wall time of each iteration, how many iterations raised
+  // the NLL (0 on a linear model, where EM is monotone), and the NLL that
+  // the L-BFGS form reaches from EM's solution (NaN when not run).
+  std::vector<double> nll_history;
+  std::vector<double> iteration_wall_s;
+  int nll_increases = 0;
+  double nll_ml_from_em = std::numeric_limits<double>::quiet_NaN();
 
   bool IsSolutionUsable() const { return status != TuneStatus::kAllStartsFailed; }
 };

@@ -478,13 +478,107 @@ void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions
   }
 }
 
+// The bounds of every parameter: Q's and R's (ResolveBounds about the
+// initial guess), then the physical parameters'.
+template <class Model, class Meas>
+void LikelihoodBounds(const InnovationLikelihood<Model, Meas>& lik, const TunerOptions& options,
+                      std::vector<double>* lower, std::vector<double>* upper) {
+  const int noise = lik.NumNoiseParams();
+  const std::vector<double> theta0 = lik.InitialTheta();
+  const std::vector<bool> is_log = lik.ParamIsLog();
+  ResolveBounds(options, std::vector<double>(theta0.begin(), theta0.begin() + noise),
+                std::vector<bool>(is_log.begin(), is_log.begin() + noise), lower, upper);
+  lik.physical().Bounds(lower, upper);
+}
+
+// `spec` with its Q (q, or q_white_accel and qc) and R replaced by those of
+// theta; Q of a white-accel kind is qc Q_wa(dt) per step, the others are
+// shown at dt_ref.
+template <class Model, class Meas>
+FilterSpec SpecAt(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
+                  const double* theta) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const double* theta_q = theta;
+  const double* theta_r = theta + lik.q_param().NumParams();
+  const Mat<N, N> Q = lik.q_param().template Matrix<double>(theta_q, lik.dt_ref());
+  const Mat<M, M> R = lik.r_param().template Matrix<double>(theta_r, 0.0);
+  FilterSpec out = spec;
+  out.q_white_accel = lik.q_param().IsWhiteAccel();
+  out.qc = lik.q_param().Qc(theta_q);
+  out.q.clear();
+  if (!out.q_white_accel)
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < N; ++j) out.q.push_back(Q(i, j));
+  out.r.clear();
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) out.r.push_back(R(i, j));
+  return out;
+}
+
+// Everything after the optimum result->theta is known: the tuned Q, R and
+// spec, the standard errors and identifiability, the poorly-identified and
+// at-bound flags.
+template <class Model, class Meas>
+void FinishTune(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+                const TunerOptions& options, const std::vector<double>& lower,
+                const std::vector<double>& upper, TuneResult* out) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
+  const int k = lik.NumParams();
+  TuneResult& result = *out;
+  const double* theta_q = result.theta.data();
+  const double* theta_r = result.theta.data() + lik.q_param().NumParams();
+  const Mat<N, N> Q = lik.q_param().template Matrix<double>(theta_q, result.dt_ref);
+  const Mat<M, M> R = lik.r_param().template Matrix<double>(theta_r, 0.0);
+  result.q.assign(N * N, 0.0);
+  result.r.assign(M * M, 0.0);
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) result.q[i * N + j] = Q(i, j);
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) result.r[i * M + j] = R(i, j);
+  result.q_white_accel = lik.q_param().IsWhiteAccel();
+  result.qc = lik.q_param().Qc(theta_q);
+  result.tuned_spec = SpecAt(lik, spec, result.theta.data());
+
+  // Standard errors and identifiability.
+  FillUncertainty(objective, options, &result);
+  std::vector<int> off_row = lik.q_param().OffDiagonalRow();
+  for (int row : lik.r_param().OffDiagonalRow()) off_row.push_back(row);
+  off_row.resize(k, -1);  // the physical parameters
+  for (int i = 0; i < k; ++i) {
+    double limit = options.poorly_identified_se;
+    if (result.is_physical[i] && !result.is_log[i]) limit = std::abs(result.theta[i]);
+    if (off_row[i] >= 0) {
+      const bool in_q = i < lik.q_param().NumParams();
+      limit = std::sqrt(in_q ? Q(off_row[i], off_row[i]) : R(off_row[i], off_row[i]));
+    }
+    result.poorly_identified.push_back(!(result.std_errors[i] <= limit));
+    const double tol = 1e-6 * std::max(1.0, std::abs(result.theta[i]));
+    result.at_bound.push_back(std::abs(result.theta[i] - lower[i]) <= tol ||
+                              std::abs(result.theta[i] - upper[i]) <= tol);
+  }
+}
+
+// EM (TunerForm::kEm), from the initial guess in result->theta_initial;
+// defined in adaptive/em.h (included at the end of this file).
+template <class Model, class Meas>
+void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+           const TunerOptions& options, const std::vector<FilterData>& datasets,
+           const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* result);
+// ALS (TunerForm::kAls); defined in adaptive/als.h.
+template <class Model, class Meas>
+void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+            const TunerOptions& options, const std::vector<FilterData>& datasets,
+            const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* result);
+
 }  // namespace tuner_internal
 
 template <class Model, class Meas>
 TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
                     const std::vector<FilterData>& datasets) {
   using namespace tuner_internal;
-  constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const auto clock_start = std::chrono::steady_clock::now();
   const InnovationLikelihood<Model, Meas> lik(spec, options, datasets);
@@ -509,16 +603,23 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
     if (i >= noise) scaled[i] = false;
   }
   std::vector<double> lower, upper;
-  {
-    const std::vector<double> noise_theta(result.theta_initial.begin(),
-                                          result.theta_initial.begin() + noise);
-    const std::vector<bool> noise_log(result.is_log.begin(), result.is_log.begin() + noise);
-    ResolveBounds(options, noise_theta, noise_log, &lower, &upper);
-    lik.physical().Bounds(&lower, &upper);
-  }
+  LikelihoodBounds(lik, options, &lower, &upper);
   if (!lik.Nll(result.theta_initial.data(), &result.nll_initial) ||
       !std::isfinite(result.nll_initial))
     result.nll_initial = kInf;
+  auto finish = [&]() {
+    result.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return result;
+  };
+  if (options.form == TunerForm::kEm || options.form == TunerForm::kAls) {
+    if (options.form == TunerForm::kEm) {
+      RunEm(objective, spec, options, datasets, lower, upper, &result);
+    } else {
+      RunAls(objective, spec, options, datasets, lower, upper, &result);
+    }
+    return finish();
+  }
 
   // Multi-start.
   const auto points = StartPoints(options, result.theta_initial, scaled, lower, upper);
@@ -552,11 +653,6 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
       result.best_start = int(s);
   }
 
-  auto finish = [&]() {
-    result.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
-    return result;
-  };
   if (result.best_start < 0) {
     result.status = TuneStatus::kAllStartsFailed;
     result.message = "the filter diverged at every one of the " + std::to_string(points.size()) +
@@ -579,40 +675,7 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
                    std::to_string(result.best_start + 1) +
                    (failed ? " (" + std::to_string(failed) + " diverged)" : "");
 
-  // Tuned matrices.
-  const double* theta_q = result.theta.data();
-  const double* theta_r = result.theta.data() + lik.q_param().NumParams();
-  const Mat<N, N> Q = lik.q_param().template Matrix<double>(theta_q, result.dt_ref);
-  const Mat<M, M> R = lik.r_param().template Matrix<double>(theta_r, 0.0);
-  for (int i = 0; i < N; ++i)
-    for (int j = 0; j < N; ++j) result.q.push_back(Q(i, j));
-  for (int i = 0; i < M; ++i)
-    for (int j = 0; j < M; ++j) result.r.push_back(R(i, j));
-  result.q_white_accel = lik.q_param().IsWhiteAccel();
-  result.qc = lik.q_param().Qc(theta_q);
-  result.tuned_spec = spec;
-  result.tuned_spec.q_white_accel = result.q_white_accel;
-  result.tuned_spec.qc = result.qc;
-  result.tuned_spec.q = result.q_white_accel ? std::vector<double>{} : result.q;
-  result.tuned_spec.r = result.r;
-
-  // Standard errors and identifiability.
-  FillUncertainty(objective, options, &result);
-  std::vector<int> off_row = lik.q_param().OffDiagonalRow();
-  for (int row : lik.r_param().OffDiagonalRow()) off_row.push_back(row);
-  off_row.resize(k, -1);  // the physical parameters
-  for (int i = 0; i < k; ++i) {
-    double limit = options.poorly_identified_se;
-    if (result.is_physical[i] && !result.is_log[i]) limit = std::abs(result.theta[i]);
-    if (off_row[i] >= 0) {
-      const bool in_q = i < lik.q_param().NumParams();
-      limit = std::sqrt(in_q ? Q(off_row[i], off_row[i]) : R(off_row[i], off_row[i]));
-    }
-    result.poorly_identified.push_back(!(result.std_errors[i] <= limit));
-    const double tol = 1e-6 * std::max(1.0, std::abs(result.theta[i]));
-    result.at_bound.push_back(std::abs(result.theta[i] - lower[i]) <= tol ||
-                              std::abs(result.theta[i] - upper[i]) <= tol);
-  }
+  FinishTune(objective, spec, options, lower, upper, &result);
   return finish();
 }
 
@@ -641,5 +704,8 @@ TuneResult TuneModel(const FilterSpec& spec, const TunerOptions& options,
       const std::vector<estlab::FilterData>&) {               \
     return &estlab::TuneModel<Model>;                         \
   }
+
+#include "adaptive/als.h"  // RunAls
+#include "adaptive/em.h"   // RunEm
 
 #endif  // ESTLAB_ADAPTIVE_TUNER_IMPL_H_

@@ -8,6 +8,8 @@
 #include <optional>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "src/cli/commands.h"
 #include "src/cli/tune_output_error.h"
 #include "src/cli/tune_profile.h"
@@ -44,6 +46,15 @@ constexpr const char* kExamples = R"(Examples:
   estlab tune --model double-pendulum --measure angles --filter ukf --alpha 1 --data a.csv \
       --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
       --init-r-scalar 0.01 --starts 4 --burn-in 20 --form least-squares --json
+  # The same by expectation-maximisation (the EKF's RTS smoother as E-step;
+  # the report adds the likelihood tuner's NLL from EM's solution), and by
+  # autocovariance least squares on 15 lags of the innovations:
+  estlab tune --model pendulum --measure sin --filter ekf --integrator rk4 --data train.csv \
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --init-q-diag 1e-4,1e-2 --init-r-diag 1 \
+      --estimator em --tolerance 1e-9 --out tuned_em.ini
+  estlab tune --model pendulum --measure sin --filter ekf --integrator rk4 --data train.csv \
+      --x0 theta=0.785398 --p0-diag 1e-4,1e-4 --init-q-diag 1e-4,1e-2 --init-r-diag 1 \
+      --estimator als --lags 15 --burn-in 100
   # Estimate the length and damping with Q and R (prediction-error ML), the
   # damping kept in [0, 5], its profile likelihood drawn (profile_L.png), and
   # write them for 'estlab filter --config':
@@ -83,6 +94,21 @@ differentiation through the filter) with a fixed-step --integrator; with
 cvodes, CVODES forward sensitivities in theta of the state (and, for the
 EKF, of the flow Jacobian's variational system) carry the same derivatives,
 with CVODES run at rtol <= 1e-10, atol <= 1e-12.
+
+Estimators: ml (default) minimises that NLL with Ceres. em alternates the
+filter's smoother (kf -> RTS, ekf -> ERTS, ukf/ckf/ghkf -> sigma-point RTS)
+with the closed-form maximiser of Q and R for each --q-param/--r-param; exact
+for the kf, where the NLL never rises from one iteration to the next, and an
+approximation otherwise (the report counts rises and gives the ml NLL reached
+from EM's solution). It stops when the relative NLL change is at most
+--tolerance (1e-9) or after --max-iterations (1000); progress per iteration
+on a terminal. als (Odelson, Rajamani & Rawlings 2006) runs the filter once
+with the initial Q and R (a suboptimal gain), and fits Q and R by least
+squares to the innovation autocovariances at lags 0..--lags-1 after
+--burn-in updates; kf and ekf (linearised along its own estimates), every
+row measured. Its report says which elements of Q and R the lags identify;
+it has no standard errors. em and als take one start and no --estimate-param;
+em takes no --burn-in.
 
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
@@ -227,9 +253,21 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
     std::cout << "              " << r.message << "\n";
     return;
   }
-  std::cout << "Ceres         " << r.termination << " (" << r.iterations << " iterations, start "
-            << r.best_start + 1 << ")\n";
-  std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n\n";
+  if (r.form == std::string("als")) {
+    std::cout << "ALS           " << r.termination << " (" << r.iterations << " iterations)\n";
+  } else if (r.form == std::string("em")) {
+    std::cout << "EM            " << r.termination << " (" << r.iterations << " iterations"
+              << (r.nll_increases ? ", NLL rose at " + std::to_string(r.nll_increases) : "")
+              << ")\n";
+  } else {
+    std::cout << "Ceres         " << r.termination << " (" << r.iterations
+              << " iterations, start " << r.best_start + 1 << ")\n";
+  }
+  std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n";
+  if (!std::isnan(r.nll_ml_from_em))
+    std::cout << "              ml from EM's solution " << r.nll_ml_from_em << " (EM - ml "
+              << r.nll_tuned - r.nll_ml_from_em << ")\n";
+  std::cout << "\n";
   std::cout << "  parameter                     initial        tuned    SE(log)\n";
   for (size_t i = 0; i < r.names.size(); ++i) {
     std::cout << "  " << std::left << std::setw(26) << r.names[i] << std::right << std::setw(12)
@@ -305,6 +343,11 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   j.Key("updates").Value(r.updates);
   j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
   j.Key("wall_s").Value(r.wall_s);
+  if (r.form == std::string("em")) {
+    j.Key("em").BeginObject().Key("nll_history").Value(r.nll_history);
+    j.Key("iteration_wall_s").Value(r.iteration_wall_s).Key("nll_increases").Value(r.nll_increases);
+    j.Key("nll_ml_from_em").Value(r.nll_ml_from_em).EndObject();
+  }
   if (r.best_start >= 0) j.Key("best_start").Value(r.best_start + 1);  // from 1, as the text
   j.Key("starts").BeginArray();
   for (const auto& s : r.starts) {
@@ -355,6 +398,12 @@ void PrintProfile(const ProfileResult& p, const std::vector<std::string>& files,
   if (!message.empty()) std::cout << "  " << message << "\n";
 }
 
+// One line per EM iteration, rewritten in place on the terminal.
+void EmProgress(int iteration, double nll, double change) {
+  std::cerr << "\rEM iteration " << iteration << "  NLL " << FormatNumber(nll) << "  change "
+            << FormatNumber(change) << "        " << std::flush;
+}
+
 std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
   if (!vm.count(opt)) return {};
   return ParseList(vm[opt].as<std::string>(), "--" + opt);
@@ -384,7 +433,8 @@ int RunTune(const std::vector<std::string>& args) {
       "log-lower", po::value<std::string>(),
       "lower bound(s) of the log parameters: one, or one per parameter")(
       "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
-      "max-iterations", po::value<int>()->default_value(200), "Ceres iterations per start")(
+      "max-iterations", po::value<int>(),
+      "Ceres iterations per start (default 200), EM iterations (default 1000)")(
       "estimate-param", po::value<std::string>(),
       "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
       "param-bounds", po::value<std::string>(),
@@ -392,7 +442,13 @@ int RunTune(const std::vector<std::string>& args) {
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
       "estimator", po::value<std::string>()->default_value("ml"),
-      "ml (prediction-error maximum likelihood) | output-error (free simulation, least squares)")(
+      "ml (prediction-error maximum likelihood, Ceres) | em (expectation-maximisation, the "
+      "smoother as E-step) | als (autocovariance least squares, kf/ekf) | output-error (free "
+      "simulation, least squares)")(
+      "lags", po::value<int>()->default_value(10),
+      "als: innovation autocovariance lags 0..N-1 fitted")(
+      "tolerance", po::value<std::string>()->default_value("1e-9"),
+      "em: stop when the relative NLL change is at most this")(
       "horizon", po::value<std::string>()->default_value("0.5"),
       "s: output-error windows and the validation's free-simulation RMSE")(
       "profile", po::value<std::string>(),
@@ -460,12 +516,29 @@ int RunTune(const std::vector<std::string>& args) {
   options.bound_width = ParseNumber(vm["bound-width"].as<std::string>(), "--bound-width");
   options.log_lower = BoundList(vm, "log-lower");
   options.log_upper = BoundList(vm, "log-upper");
-  options.max_iterations = vm["max-iterations"].as<int>();
   options.seed = SeedOf(settings);
   auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
   const std::string estimator = vm["estimator"].as<std::string>();
-  if (estimator != "ml" && estimator != "output-error")
-    throw InputError("--estimator: expected ml or output-error, got '" + estimator + "'");
+  if (estimator != "ml" && estimator != "em" && estimator != "als" && estimator != "output-error")
+    throw InputError("--estimator: expected ml, em, als or output-error, got '" + estimator + "'");
+  if (estimator == "als") {
+    if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
+    options.form = TunerForm::kAls;
+    options.als_lags = vm["lags"].as<int>();
+  } else if (!vm["lags"].defaulted()) {
+    throw InputError("--lags applies to --estimator als");
+  }
+  options.max_iterations = vm.count("max-iterations") ? vm["max-iterations"].as<int>()
+                           : estimator == "em"         ? 1000
+                                                       : 200;
+  if (estimator == "em") {
+    if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
+    options.form = TunerForm::kEm;
+    options.em_tolerance = ParseNumber(vm["tolerance"].as<std::string>(), "--tolerance");
+    if (isatty(STDERR_FILENO)) options.progress = EmProgress;
+  } else if (!vm["tolerance"].defaulted()) {
+    throw InputError("--tolerance applies to --estimator em");
+  }
   const double horizon = ParseNumber(vm["horizon"].as<std::string>(), "--horizon");
   if (!(horizon > 0)) throw InputError("--horizon must be > 0 s, got " + FormatNumber(horizon));
   options.estimate =
@@ -527,6 +600,7 @@ int RunTune(const std::vector<std::string>& args) {
     return 0;
   }
   const TuneResult result = model.tune(spec, options, datasets);
+  if (options.progress) std::cerr << "\n";
   std::optional<ProfileResult> profile;
   std::vector<std::string> profile_files;
   std::string profile_message;

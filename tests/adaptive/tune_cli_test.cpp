@@ -209,6 +209,39 @@ TEST_F(TuneCli, BadInputExitsTwo) {
   }
 }
 
+// Issue 13: --estimator em and als end to end: the JSON's "em" history,
+// the ini that `estlab filter --config` reads, ALS's identifiability notes,
+// and the options they do not take (exit 2, no output).
+TEST_F(TuneCli, EmAndAlsEstimators) {
+  Simulate("train.csv", 6);
+  const std::string base =
+      std::string("tune ") + kFilter + "--data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 ";
+  const CmdResult em = Estlab(base + "--estimator em --tolerance 1e-6 --out tuned_em.ini --json");
+  ASSERT_EQ(em.exit_code, 0) << em.err << em.out;
+  EXPECT_NE(em.out.find("\"form\": \"em\""), std::string::npos) << em.out;
+  EXPECT_NE(em.out.find("\"nll_history\": ["), std::string::npos) << em.out;
+  EXPECT_NE(em.out.find("\"nll_ml_from_em\": "), std::string::npos) << em.out;
+  const CmdResult f = Estlab(std::string("filter ") + kFilter +
+                             "--data train.csv --config tuned_em.ini --out est.csv");
+  EXPECT_EQ(f.exit_code, 0) << f.err;
+  const CmdResult text = Estlab(base + "--estimator em --tolerance 1e-6");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("ml from EM's solution"), std::string::npos) << text.out;
+  const CmdResult als = Estlab(base + "--estimator als --lags 8 --burn-in 50");
+  ASSERT_EQ(als.exit_code, 0) << als.err << als.out;
+  EXPECT_NE(als.out.find("ALS with 8 lag(s) identifies"), std::string::npos) << als.out;
+  for (const std::string& bad :
+       {base + "--estimator em --burn-in 5", base + "--estimator em --starts 2",
+        base + "--estimator em --form least-squares", base + "--tolerance 1e-6",
+        base + "--lags 4", base + "--estimator als --lags 0",
+        base + "--estimator als --filter ukf", base + "--estimator nope"}) {
+    const CmdResult r = Estlab(bad + " --out bad.ini");
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: error:"), std::string::npos) << r.err;
+    EXPECT_FALSE(Exists("bad.ini")) << bad;
+  }
+}
+
 TEST_F(TuneCli, EveryStartDivergingExitsOneWithoutIni) {
   Simulate("train.csv", 5);
   // trace(P0) = 2e13 exceeds the divergence guard (1e12) at the first row.

@@ -1,0 +1,376 @@
+// Expectation-maximisation for Q and R (`estlab tune --estimator em`,
+// TunerForm::kEm), with the filter's own smoother as the E-step
+// (Shumway & Stoffer 1982; Saerkkae & Svensson, Bayesian Filtering and
+// Smoothing, 2nd ed., 2023, ch. 16). Include only through
+// adaptive/tuner_impl.h.
+//
+// One iteration at the current Q, R:
+//   E-step  run the filter and its RTS smoother over every dataset
+//           (RunFilterWith with smooth and the lag-one covariances, the code
+//           of `estlab smooth --full-cov`), giving for each row k the
+//           smoothed x^s_k, P^s_k and Cov(x_k, x_{k+1} | all data) = C^s_k;
+//   M-step  with f the filter's noise-free process map and h its
+//           measurement (InnovationLikelihood::PointTransition,
+//           MeasurementResidual: the KF's linearised, discretised model, the
+//           model itself for the others),
+//             A_k = E[(x_{k+1} - f(x_k)) (x_{k+1} - f(x_k))^T]
+//             B_k = E[wrap(z_k - h(x_k)) wrap(z_k - h(x_k))^T]
+//           under the smoothed Gaussians N([x^s_k; x^s_{k+1}],
+//           [[P^s_k, C^s_k], [C^s_k^T, P^s_{k+1}]]) and N(x^s_k, P^s_k), by
+//           the third-degree cubature rule (exact when f and h are linear,
+//           hence EM is exact for the KF; the sigma-point approximation of
+//           Saerkkae's ch. 16 otherwise), and Q, R maximise
+//             -1/2 sum_k [log det Q_k + tr(Q_k^-1 A_k)]   (K transitions)
+//             -1/2 sum_k [log det R + tr(R^-1 B_k)]       (K_z measurements)
+//           in closed form for each parameterisation:
+//             full         Q = 1/K sum_k A_k
+//             diag         Q = diag(1/K sum_k A_k)
+//             scalar       Q = tr(sum_k A_k) / (n K) I
+//             white-accel  Q_k = qc W(dt_k): qc = sum_k tr(W_k^-1 A_k) / (n_w K)
+//                          over the n_w states of the position/rate pairs
+//             fixed        unchanged
+//           (the same for R with B_k).
+// The transition from the prior to the first row (spec.t0 before it) is not
+// in the M-step: x0 and P0 are not re-estimated.
+//
+// Monitoring: after every M-step the exact innovation NLL (the ML tuner's
+// objective, adaptive/likelihood.h) is evaluated. On a linear model with
+// the KF it never increases (EM's monotonicity); otherwise an increase
+// (above 1e-12 |NLL|, the rounding of the sum) is counted in
+// TuneResult::nll_increases, and the result is the iterate with
+// the lowest NLL. Stops when |NLL_i - NLL_{i-1}| <= em_tolerance |NLL_i| or
+// after max_iterations. Then, with em_compare_ml, the L-BFGS form starts
+// from EM's solution and its NLL is reported beside EM's.
+//
+// WARNING: EM converges linearly; on weakly identified directions (a full R
+// against a diagonal Q, say) it may need hundreds of iterations where the
+// L-BFGS tuner needs tens.
+#ifndef ESTLAB_ADAPTIVE_EM_H_
+#define ESTLAB_ADAPTIVE_EM_H_
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "adaptive/tuner_impl.h"
+#include "src/run/filter_run_impl.h"
+
+namespace estlab {
+namespace em_internal {
+
+// The M-step's sums over every dataset.
+template <int N, int M>
+struct EmSums {
+  Mat<N, N> a = Mat<N, N>::Zero();  // sum_k A_k
+  long transitions = 0;             // K
+  double white = 0.0;               // sum_k tr(W_k^-1 A_k) on the paired states
+  long white_dims = 0;              // n_w K
+  Mat<M, M> b = Mat<M, M>::Zero();  // sum_k B_k
+  long measurements = 0;            // K_z
+};
+
+// Row k of a smoothed run: x^s_k, P^s_k and C^s_k (NaN on the last row).
+template <int N>
+struct SmoothedRow {
+  Vec<double, N> x;
+  Mat<N, N> P;
+  Mat<N, N> lag_one;
+};
+
+// The smoothed rows of `estlab smooth --full-cov` (columns <s>_est, <s>_var,
+// cov_<a>_<b>, lag1_<a>_<b>), read back by name.
+template <class Model>
+std::vector<SmoothedRow<Model::kStateDim>> ReadSmoothedRows(const FilterRunOutput& out) {
+  constexpr int N = Model::kStateDim;
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(out.columns.begin(), out.columns.end(), name);
+    if (it == out.columns.end()) throw NumericalError("EM: the smoother wrote no column " + name);
+    return size_t(it - out.columns.begin());
+  };
+  const auto& names = Model::kStateNames;
+  std::vector<size_t> est(N), var(N), lag(N * N), cov(N * N, 0);
+  for (int i = 0; i < N; ++i) {
+    est[i] = column(std::string(names[i]) + "_est");
+    var[i] = column(std::string(names[i]) + "_var");
+    for (int j = 0; j < N; ++j) {
+      lag[i * N + j] = column(std::string("lag1_") + names[i] + "_" + names[j]);
+      if (j > i) cov[i * N + j] = column(std::string("cov_") + names[i] + "_" + names[j]);
+    }
+  }
+  std::vector<SmoothedRow<N>> rows(out.rows.size());
+  for (size_t k = 0; k < out.rows.size(); ++k) {
+    const std::vector<double>& r = out.rows[k];
+    SmoothedRow<N>& s = rows[k];
+    for (int i = 0; i < N; ++i) {
+      s.x(i) = r[est[i]];
+      s.P(i, i) = r[var[i]];
+      for (int j = 0; j < N; ++j) {
+        s.lag_one(i, j) = r[lag[i * N + j]];
+        if (j > i) s.P(i, j) = s.P(j, i) = r[cov[i * N + j]];
+      }
+    }
+  }
+  return rows;
+}
+
+// Cubature points of N(mean, cov): the rule's own DrawSigmaPoints, with a
+// jitter of 1e-12 of the mean variance when cov is only semidefinite.
+template <int D>
+bool CubaturePoints(const SigmaPointSet& set, const Vec<double, D>& mean, const Mat<D, D>& cov,
+                    PointsT<double, D>* points) {
+  if (DrawSigmaPoints<D>(set, mean, cov, /*add_jitter=*/false, points)) return true;
+  Mat<D, D> jittered = cov;
+  jittered.diagonal().array() += 1e-12 * std::max(cov.trace() / D, 1e-300);
+  return DrawSigmaPoints<D>(set, mean, jittered, false, points);
+}
+
+// Adds A_k of the transition from row a to row b (times t0 -> t1, input u).
+template <class Model, class Meas>
+bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& joint,
+                   const SmoothedRow<Model::kStateDim>& a, const SmoothedRow<Model::kStateDim>& b,
+                   double t0, double t1, double u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
+  constexpr int N = Model::kStateDim;
+  Vec<double, 2 * N> mean;
+  mean << a.x, b.x;
+  Mat<2 * N, 2 * N> cov;
+  cov << a.P, a.lag_one, a.lag_one.transpose(), b.P;
+  PointsT<double, 2 * N> points(2 * N, joint.unit_points.cols());
+  if (!cov.allFinite() || !CubaturePoints<2 * N>(joint, mean, cov, &points)) return false;
+  Mat<N, N> A = Mat<N, N>::Zero();
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Vec<double, N> x_a = points.col(i).template head<N>();
+    const Vec<double, N> d = points.col(i).template tail<N>() - lik.PointTransition(x_a, t0, t1, u);
+    A.noalias() += joint.mean_weights(i) * d * d.transpose();
+  }
+  sums->a += A;
+  ++sums->transitions;
+  if (lik.q_param().kind() == NoiseParam::kWhiteAccel) {  // tr(W_k^-1 A_k) on the pairs
+    const Mat<N, N> W = lik.q_param().WhiteAccel(1.0, t1 - t0);
+    std::vector<int> paired;
+    for (int i = 0; i < N; ++i)
+      if (W(i, i) > 0) paired.push_back(i);
+    const int n_w = int(paired.size());
+    Eigen::MatrixXd Wb(n_w, n_w), Ab(n_w, n_w);
+    for (int i = 0; i < n_w; ++i)
+      for (int j = 0; j < n_w; ++j) {
+        Wb(i, j) = W(paired[i], paired[j]);
+        Ab(i, j) = A(paired[i], paired[j]);
+      }
+    const Eigen::LLT<Eigen::MatrixXd> llt(Wb);
+    if (llt.info() != Eigen::Success) return false;
+    sums->white += llt.solve(Ab).trace();
+    sums->white_dims += n_w;
+  }
+  return true;
+}
+
+// Adds B_k of a measured row.
+template <class Model, class Meas>
+bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& state,
+                    const SmoothedRow<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
+                    EmSums<Model::kStateDim, Meas::kDim>* sums) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  PointsT<double, N> points(N, state.unit_points.cols());
+  if (!row.P.allFinite() || !CubaturePoints<N>(state, row.x, row.P, &points)) return false;
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Vec<double, M> e = lik.MeasurementResidual(z, points.col(i));
+    sums->b.noalias() += state.mean_weights(i) * e * e.transpose();
+  }
+  ++sums->measurements;
+  return true;
+}
+
+// The E-step over every dataset at `spec`'s Q and R. False with *why.
+template <class Model, class Meas>
+bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
+           const std::vector<FilterData>& datasets, EmSums<Model::kStateDim, Meas::kDim>* sums,
+           std::string* why) {
+  constexpr int N = Model::kStateDim;
+  SigmaPointOptions cubature;
+  cubature.rule = SigmaRule::kCubature;
+  static thread_local const SigmaPointSet joint = MakeSigmaPointSet(2 * N, cubature);
+  static thread_local const SigmaPointSet state = MakeSigmaPointSet(N, cubature);
+  FilterSpec smooth = spec;
+  smooth.smooth = true;
+  smooth.full_cov = true;
+  for (const FilterData& d : datasets) {
+    const FilterRunOutput out = RunFilterWith<Model, Meas>(smooth, d);
+    if (!out.summary.ok) {
+      *why = out.summary.message;
+      return false;
+    }
+    const std::vector<SmoothedRow<N>> rows = ReadSmoothedRows<Model>(out);
+    const std::string where = d.path.empty() ? "" : " of " + d.path;
+    const bool complete = ForEachStep<Meas::kDim>(
+        spec, d,
+        [&](size_t k, double t0, double t1, double u) {
+          if (k == 0) return true;  // from the prior: not re-estimated
+          if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, u, sums)) return true;
+          *why = "the smoothed joint covariance of rows " + std::to_string(k - 1) + " and " +
+                 std::to_string(k) + where + " is not positive semidefinite";
+          return false;
+        },
+        [&](size_t k, const Vec<double, Meas::kDim>* z) {
+          if (z == nullptr || AddMeasurement(lik, state, rows[k], *z, sums)) return true;
+          *why = "the smoothed covariance of row " + std::to_string(k) + where +
+                 " is not positive semidefinite";
+          return false;
+        });
+    if (!complete) return false;
+  }
+  return true;
+}
+
+// The closed-form maximiser of one covariance (see the header comment).
+template <int D>
+InitialCovariance<D> MStep(NoiseParam kind, const Mat<D, D>& sum, long count, double white,
+                           long white_dims, const InitialCovariance<D>& current) {
+  InitialCovariance<D> next;
+  const Mat<D, D> mean = 0.5 * (sum + sum.transpose()) / double(std::max(count, 1L));
+  switch (kind) {
+    case NoiseParam::kFull:
+      next.matrix = mean;
+      break;
+    case NoiseParam::kDiag:
+      next.matrix = Mat<D, D>(mean.diagonal().asDiagonal());
+      break;
+    case NoiseParam::kScalar:
+      next.matrix = (mean.trace() / D) * Mat<D, D>::Identity();
+      break;
+    case NoiseParam::kWhiteAccel:
+      next.white_accel = true;
+      next.qc = white / double(std::max(white_dims, 1L));
+      break;
+    case NoiseParam::kFixed:
+      next = current;
+      break;
+  }
+  return next;
+}
+
+// theta of Q and R after one M-step; throws InputError when a matrix is
+// not positive definite (the parameterisation has no theta for it).
+template <class Model, class Meas>
+std::vector<double> MStepTheta(const InnovationLikelihood<Model, Meas>& lik,
+                               const std::vector<double>& theta,
+                               const EmSums<Model::kStateDim, Meas::kDim>& sums) {
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const auto& qp = lik.q_param();
+  const auto& rp = lik.r_param();
+  InitialCovariance<N> q_now;
+  q_now.matrix = qp.template Matrix<double>(theta.data(), lik.dt_ref());
+  q_now.white_accel = qp.IsWhiteAccel();
+  q_now.qc = qp.Qc(theta.data());
+  InitialCovariance<M> r_now;
+  r_now.matrix = rp.template Matrix<double>(theta.data() + qp.NumParams(), 0.0);
+  const CovarianceParam<N> q_next(
+      qp.kind(), "q", likelihood_internal::StateNames<Model>(),
+      likelihood_internal::Pairs<Model>(),
+      MStep<N>(qp.kind(), sums.a, sums.transitions, sums.white, sums.white_dims, q_now),
+      lik.dt_ref());
+  const CovarianceParam<M> r_next(rp.kind(), "r", likelihood_internal::OutputNames<Meas>(), {},
+                                  MStep<M>(rp.kind(), sums.b, sums.measurements, 0.0, 0, r_now),
+                                  0.0);
+  std::vector<double> next = q_next.InitialTheta();
+  const std::vector<double>& r = r_next.InitialTheta();
+  next.insert(next.end(), r.begin(), r.end());
+  return next;
+}
+
+}  // namespace em_internal
+
+namespace tuner_internal {
+
+template <class Model, class Meas>
+void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+           const TunerOptions& options, const std::vector<FilterData>& datasets,
+           const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+  using namespace em_internal;
+  using Clock = std::chrono::steady_clock;
+  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
+  TuneResult& result = *out;
+  TuneStart start;
+  start.theta_start = result.theta_initial;
+  start.nll_start = result.nll_initial;
+  std::vector<double> theta = result.theta_initial, best = theta;
+  double nll = result.nll_initial, best_nll = nll;
+  result.nll_history.push_back(nll);
+  bool converged = false;
+  std::string why;
+  if (!std::isfinite(nll)) {
+    why = "the filter failed at the initial guess";
+  }
+  while (why.empty() && start.iterations < options.max_iterations) {
+    const auto t_it = Clock::now();
+    EmSums<Model::kStateDim, Meas::kDim> sums;
+    std::vector<double> next;
+    try {
+      if (!EStep(lik, SpecAt(lik, spec, theta.data()), datasets, &sums, &why)) break;
+      next = MStepTheta(lik, theta, sums);
+    } catch (const std::exception& e) {  // InputError from the M-step, NumericalError
+      why = std::string("M-step: ") + e.what();
+      break;
+    }
+    double nll_next = kInf;
+    if (!lik.Nll(next.data(), &nll_next, &why) || !std::isfinite(nll_next)) {
+      why = "the filter failed at the M-step's Q and R: " + why;
+      break;
+    }
+    ++start.iterations;
+    const double change = nll_next - nll;
+    // A rise counts above the rounding of a sum of many terms.
+    result.nll_increases += change > 1e-12 * std::abs(nll_next);
+    result.nll_history.push_back(nll_next);
+    result.iteration_wall_s.push_back(std::chrono::duration<double>(Clock::now() - t_it).count());
+    if (options.progress) options.progress(start.iterations, nll_next, change);
+    theta = next;
+    nll = nll_next;
+    if (nll < best_nll) best = theta, best_nll = nll;
+    if (std::abs(change) <= options.em_tolerance * std::abs(nll)) {
+      converged = true;
+      break;
+    }
+  }
+  start.ok = std::isfinite(best_nll);
+  start.theta_end = best;
+  start.nll_end = start.ok ? best_nll : kInf;
+  start.termination =
+      converged ? "relative NLL change below " + FormatNumber(options.em_tolerance)
+      : why.empty()
+          ? "iteration limit (" + std::to_string(options.max_iterations) + ") reached"
+          : "stopped at iteration " + std::to_string(start.iterations + 1) + ": " + why;
+  result.starts.push_back(start);
+  result.iterations = start.iterations;
+  result.termination = start.termination;
+  if (!start.ok) {
+    result.status = TuneStatus::kAllStartsFailed;
+    result.message = "EM: " + start.termination;
+    result.nll_tuned = kInf;
+    return;
+  }
+  result.best_start = 0;
+  result.status = converged ? TuneStatus::kConverged : TuneStatus::kNoConvergence;
+  result.theta = best;
+  result.nll_tuned = best_nll;
+  result.message = "EM, " + std::to_string(start.iterations) + " iteration(s)" +
+                   (result.nll_increases
+                        ? ", the NLL rose at " + std::to_string(result.nll_increases) +
+                              " (the E-step is approximate for this filter)"
+                        : "");
+  if (options.em_compare_ml && !best.empty()) {
+    bool ml_converged = false;
+    const TuneStart ml = RunLbfgs(objective, options, lower, upper, best, &ml_converged);
+    if (ml.ok) result.nll_ml_from_em = ml.nll_end;
+  }
+  FinishTune(objective, spec, options, lower, upper, &result);
+}
+
+}  // namespace tuner_internal
+}  // namespace estlab
+
+#endif  // ESTLAB_ADAPTIVE_EM_H_

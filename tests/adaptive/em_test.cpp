@@ -1,0 +1,190 @@
+// Tests of EM for Q and R (adaptive/em.h, TunerForm::kEm), against the
+// likelihood tuner as the independent reference:
+//   * linear model, KF, white-accel Q and R over 20 datasets: the exact
+//     innovation NLL never rises from one EM iteration to the next, and EM's
+//     Q, R equal the L-BFGS tuner's optimum to 1e-4 relative;
+//   * diagonal Q with a full (correlated) R on two axes: the same;
+//   * the pendulum with the EKF: EM's approximate E-step still lowers the
+//     NLL, and the L-BFGS tuner from EM's solution is reported beside it;
+//   * options that EM does not take are refused.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "adaptive/tuner.h"
+#include "adaptive/tuner_impl.h"
+#include "models/pendulum.h"
+#include "src/core/random.h"
+#include "src/ode/transition_impl.h"  // MakeTransition for the test-only model
+#include "tests/adaptive/constant_velocity.h"
+#include "tests/adaptive/tuner_fixture.h"
+
+namespace estlab {
+namespace {
+
+using Cv = testing::ConstantVelocity<1>;
+using Cv2 = testing::ConstantVelocity<2>;
+using testing::Simulate;
+using testing::WhiteAccel;
+
+double RelDiff(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); }
+
+// The largest rise of the NLL from one iteration to the next, relative to
+// |NLL| (<= 0 when it never rises).
+double WorstRise(const std::vector<double>& history) {
+  double worst = -1e300;
+  for (size_t i = 1; i < history.size(); ++i)
+    worst = std::max(worst, (history[i] - history[i - 1]) / std::abs(history[i]));
+  return worst;
+}
+
+FilterSpec CvKfSpec(double qc0, double r0) {
+  FilterSpec spec;
+  spec.measurement = "positions";
+  spec.filter = KfOptions{};
+  spec.transition.integrator = Integrator::kEuler;
+  spec.x0 = {0.0, 1.0};
+  spec.p0 = {1.0, 0.0, 0.0, 1.0};
+  spec.q_white_accel = true;
+  spec.qc = qc0;
+  spec.r = {r0};
+  return spec;
+}
+
+TEST(EmLinear, LikelihoodNeverFallsAndEmReachesTheLikelihoodTunersOptimum) {
+  const double dt = 0.1, qc_true = 0.5, r_true = 0.04;
+  const FilterSpec spec = CvKfSpec(5.0, 1.0);  // x10 and x25 off
+  TunerOptions ml;
+  ml.q_param = NoiseParam::kWhiteAccel;
+  ml.r_param = NoiseParam::kDiag;
+  TunerOptions em = ml;
+  em.form = TunerForm::kEm;
+  em.em_tolerance = 1e-12;
+  em.max_iterations = 5000;
+  double worst_rise = -1e300, worst_gap = 0.0, worst_nll_gap = 0.0;
+  int iterations = 0;
+  for (int d = 0; d < 20; ++d) {
+    const std::vector<FilterData> data = {Simulate<Cv, Cv::Positions>(
+        Integrator::kEuler, Vec<double, 2>(0.0, 1.0), dt, 300, WhiteAccel<Cv>(qc_true, dt),
+        Mat<1, 1>::Constant(r_true), DeriveSeed({21, uint64_t(d)}))};
+    const TuneResult e = TuneWith<Cv, Cv::Positions>(spec, em, data);
+    const TuneResult m = TuneWith<Cv, Cv::Positions>(spec, ml, data);
+    ASSERT_EQ(e.status, TuneStatus::kConverged) << e.message << " " << e.termination;
+    ASSERT_EQ(m.status, TuneStatus::kConverged) << m.message;
+    ASSERT_EQ(e.nll_history.size(), size_t(e.iterations) + 1);
+    EXPECT_EQ(e.nll_increases, 0);
+    worst_rise = std::max(worst_rise, WorstRise(e.nll_history));
+    const double gap = std::max(RelDiff(e.qc, m.qc), RelDiff(e.r[0], m.r[0]));
+    worst_gap = std::max(worst_gap, gap);
+    worst_nll_gap = std::max(worst_nll_gap, e.nll_tuned - m.nll_tuned);
+    iterations = std::max(iterations, e.iterations);
+    EXPECT_LT(gap, 1e-4) << "dataset " << d << ": EM qc " << e.qc << " R " << e.r[0]
+                         << ", ml qc " << m.qc << " R " << m.r[0];
+    EXPECT_LE(std::abs(e.nll_ml_from_em - m.nll_tuned), 1e-6 * std::abs(m.nll_tuned));
+  }
+  std::printf(
+      "  20 datasets: worst relative NLL rise %.3g, worst |EM - ml| / ml of qc, R %.3g, "
+      "NLL(EM) - NLL(ml) <= %.3g, iterations <= %d\n",
+      worst_rise, worst_gap, worst_nll_gap, iterations);
+  EXPECT_LE(worst_rise, 1e-11);  // rounding of a sum of 300 terms
+}
+
+TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
+  const double dt = 0.1;
+  Mat<4, 4> Q = Vec<double, 4>(0.01, 0.01, 0.02, 0.02).asDiagonal();
+  Mat<2, 2> R;
+  R << 0.04, 0.018, 0.018, 0.09;  // correlation 0.3
+  FilterSpec spec;
+  spec.measurement = "positions";
+  spec.filter = KfOptions{};
+  spec.transition.integrator = Integrator::kEuler;
+  spec.x0 = {0.0, 1.0, 0.0, -0.5};
+  spec.p0 = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  spec.q = {1e-3, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 1e-3, 0, 0, 0, 0, 0.1};
+  spec.r = {0.2, 0.0, 0.0, 0.2};
+  const std::vector<FilterData> data = {
+      Simulate<Cv2, Cv2::Positions>(Integrator::kEuler, Vec<double, 4>(0.0, 1.0, 0.0, -0.5), dt,
+                                    3000, Q, R, 77)};
+  TunerOptions ml;
+  ml.q_param = NoiseParam::kDiag;
+  ml.r_param = NoiseParam::kFull;
+  TunerOptions em = ml;
+  em.form = TunerForm::kEm;
+  em.em_tolerance = 1e-12;
+  em.max_iterations = 20000;
+  const TuneResult e = TuneWith<Cv2, Cv2::Positions>(spec, em, data);
+  const TuneResult m = TuneWith<Cv2, Cv2::Positions>(spec, ml, data);
+  ASSERT_TRUE(e.IsSolutionUsable()) << e.message;
+  ASSERT_EQ(m.status, TuneStatus::kConverged) << m.message;
+  EXPECT_EQ(e.nll_increases, 0);
+  EXPECT_LE(WorstRise(e.nll_history), 1e-11);
+  double gap = 0.0;
+  for (int i = 0; i < 4; ++i) gap = std::max(gap, RelDiff(e.q[i * 4 + i], m.q[i * 4 + i]));
+  for (int i = 0; i < 4; ++i) gap = std::max(gap, RelDiff(e.r[i], m.r[i]));
+  double per_iteration = 0.0;
+  for (double s : e.iteration_wall_s) per_iteration += s;
+  per_iteration /= std::max<size_t>(1, e.iteration_wall_s.size());
+  for (int i = 0; i < 4; ++i)
+    std::printf("  q%d EM %.6g ml %.6g\n", i, e.q[i * 4 + i], m.q[i * 4 + i]);
+  for (int i = 0; i < 4; ++i) std::printf("  r%d EM %.6g ml %.6g\n", i, e.r[i], m.r[i]);
+  std::printf("  NLL EM %.6f ml %.6f ml-from-EM %.6f\n", e.nll_tuned, m.nll_tuned, e.nll_ml_from_em);
+  std::printf("  diag Q, full R: %d EM iterations (%.2f ms each), worst relative gap to ml %.3g\n",
+              e.iterations, 1e3 * per_iteration, gap);
+  EXPECT_LT(gap, 1e-4);
+}
+
+TEST(EmPendulum, ApproximateEStepLowersTheNllAndReportsTheMlOptimumBeside) {
+  using P = models::Pendulum;
+  const double dt = 0.01;
+  const std::vector<FilterData> data = {Simulate<P, P::Sin>(
+      Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), dt, 1000,
+      Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 5)};
+  FilterSpec spec;
+  spec.measurement = "sin";
+  spec.filter = EkfOptions{};
+  spec.transition.integrator = Integrator::kRk4;
+  spec.x0 = {testing::kPi / 4, 0.0};
+  spec.p0 = {1e-4, 0.0, 0.0, 1e-4};
+  spec.q = {1e-4, 0.0, 0.0, 1e-2};
+  spec.r = {1.0};
+  TunerOptions em;
+  em.form = TunerForm::kEm;
+  em.q_param = NoiseParam::kDiag;
+  em.r_param = NoiseParam::kDiag;
+  em.max_iterations = 300;
+  em.em_tolerance = 1e-7;
+  const TuneResult e = TuneWith<P, P::Sin>(spec, em, data);
+  ASSERT_TRUE(e.IsSolutionUsable()) << e.message;
+  std::printf("  pendulum EKF: NLL %.4f -> EM %.4f (%d iterations, %d rises), ml from EM %.4f\n",
+              e.nll_initial, e.nll_tuned, e.iterations, e.nll_increases, e.nll_ml_from_em);
+  EXPECT_LT(e.nll_tuned, e.nll_initial - 100.0);
+  ASSERT_TRUE(std::isfinite(e.nll_ml_from_em));
+  EXPECT_LE(e.nll_ml_from_em, e.nll_tuned + 1e-9);
+  EXPECT_NEAR(e.r[0], 0.01, 0.003);  // R is well identified
+}
+
+TEST(EmInput, OptionsEmDoesNotTakeAreRefused) {
+  TunerOptions em;
+  em.form = TunerForm::kEm;
+  std::string error;
+  EXPECT_TRUE(em.IsValid(&error)) << error;
+  TunerOptions burn = em;
+  burn.burn_in = 5;
+  EXPECT_FALSE(burn.IsValid(&error));
+  EXPECT_NE(error.find("burn-in"), std::string::npos) << error;
+  TunerOptions starts = em;
+  starts.starts = 3;
+  EXPECT_FALSE(starts.IsValid(&error));
+  TunerOptions phys = em;
+  phys.estimate.push_back({.name = "L"});
+  EXPECT_FALSE(phys.IsValid(&error));
+  TunerOptions tol = em;
+  tol.em_tolerance = -1.0;
+  EXPECT_FALSE(tol.IsValid(&error));
+}
+
+}  // namespace
+}  // namespace estlab
