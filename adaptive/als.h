@@ -91,22 +91,23 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
   filter->Initialize(PriorMean<Model, Meas>(spec, d), MatFromVector<N, N>(spec.p0));
   std::vector<AlsStep<N, M>> steps;
   auto fail = [&](size_t k, const std::string& what) {
-    throw NumericalError("ALS: the filter failed at row " + std::to_string(k) + " (t = " +
-                         FormatNumber(d.t[k]) + ") of " + d.path + ": " + what);
+    throw NumericalError("ALS: the filter failed at row " + std::to_string(k) +
+                         " (t = " + FormatNumber(d.t[k]) + ") of " + d.path + ": " + what);
   };
   ForEachStep<M>(
       spec, d,
       [&](size_t k, double t0, double t1, double u) {
         const StateCov p_plus = filter->cov();
         filter->SetInput(u);
-        const StateCov Q = spec.q_white_accel ? WhiteAccelQ<Model>(spec.qc, t1 - t0)
-                                              : MatFromVector<N, N>(spec.q);
+        const StateCov Q =
+            spec.q_white_accel ? WhiteAccelQ<Model>(spec.qc, t1 - t0) : MatFromVector<N, N>(spec.q);
         if (filter->Predict(t0, t1, Q) != FilterStatus::kOk) fail(k, filter->last_error());
         StateCov C;
         if (!filter->PredictCrossCov(&C)) fail(k, "no prediction cross-covariance");
         if (steps.empty()) return true;  // from the prior: before the first update
         const Eigen::LLT<StateCov> llt(p_plus);
-        if (llt.info() != Eigen::Success) fail(k, "the filtered covariance is not positive definite");
+        if (llt.info() != Eigen::Success)
+          fail(k, "the filtered covariance is not positive definite");
         steps.back().F = llt.solve(C).transpose();  // F^T = P+^-1 C
         steps.back().dt = t1 - t0;
         steps.back().predicted = true;
@@ -125,7 +126,8 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
         s.K = r.gain;
         s.P = p_minus;
         const Eigen::LLT<StateCov> llt(p_minus);
-        if (llt.info() != Eigen::Success) fail(k, "the predicted covariance is not positive definite");
+        if (llt.info() != Eigen::Success)
+          fail(k, "the predicted covariance is not positive definite");
         s.H = llt.solve(s.K * r.innovation_cov).transpose();  // H^T = P-^-1 K S
         steps.push_back(s);
         return true;
@@ -266,11 +268,12 @@ struct AlsResidual {
   }
 };
 
-// One sentence per direction of p that the lags do not see.
+// What the lags identify: the elements of p with no component in J's null
+// space, and the directions they do not see (each written out when there
+// are at most two, else counted with the elements they involve).
 inline std::vector<std::string> AlsIdentifiability(const Eigen::MatrixXd& J,
                                                    const std::vector<std::string>& names,
                                                    int lags) {
-  std::vector<std::string> out;
   Eigen::MatrixXd scaled = J;
   for (Eigen::Index c = 0; c < J.cols(); ++c) {
     const double norm = J.col(c).norm();
@@ -280,27 +283,38 @@ inline std::vector<std::string> AlsIdentifiability(const Eigen::MatrixXd& J,
   const Eigen::VectorXd& sv = svd.singularValues();
   const double top = sv.size() ? sv(0) : 0.0;
   std::vector<bool> seen(J.cols(), true);
+  std::vector<std::string> directions;
   for (Eigen::Index c = 0; c < J.cols(); ++c) {
-    const bool null = c >= sv.size() || !(sv(c) > 1e-9 * top);
-    if (!null) continue;
+    if (c < sv.size() && sv(c) > 1e-9 * top) continue;  // a seen direction
     const Eigen::VectorXd v = svd.matrixV().col(c);
     std::string combination;
     for (Eigen::Index i = 0; i < v.size(); ++i) {
       if (std::abs(v(i)) < 1e-6) continue;
       seen[i] = false;
-      combination += (combination.empty() ? "" : v(i) < 0 ? " - " : " + ") +
+      combination += (combination.empty() ? ""
+                      : v(i) < 0          ? " - "
+                                          : " + ") +
                      FormatNumber(combination.empty() ? v(i) : std::abs(v(i))) + " " + names[i];
     }
-    out.push_back("ALS with " + std::to_string(lags) +
-                  " lag(s) does not see the direction " + combination +
-                  " (more lags may make it identifiable)");
+    directions.push_back(combination);
   }
-  std::string identified;
+  const std::string with = "ALS with " + std::to_string(lags) + " lag(s) ";
+  std::string identified, blind;
   for (size_t i = 0; i < names.size(); ++i)
-    if (seen[i]) identified += (identified.empty() ? "" : ", ") + names[i];
-  out.insert(out.begin(), "ALS with " + std::to_string(lags) + " lag(s) identifies " +
-                              (identified.empty() ? std::string("none of the elements")
-                                                  : identified));
+    (seen[i] ? identified : blind) +=
+        ((seen[i] ? identified : blind).empty() ? "" : ", ") + names[i];
+  std::vector<std::string> out{
+      with + "identifies " +
+      (identified.empty() ? std::string("none of the elements") : identified)};
+  if (directions.empty()) return out;
+  if (directions.size() <= 2) {
+    for (const std::string& d : directions)
+      out.push_back(with + "does not see the direction " + d + " (more lags may help)");
+  } else {
+    out.push_back(with + "does not see " + std::to_string(directions.size()) + " of the " +
+                  std::to_string(names.size()) + " directions of (Q, R), involving " + blind +
+                  " (more lags may help)");
+  }
   return out;
 }
 
@@ -319,14 +333,14 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
   TuneResult& result = *out;
   const bool ekf = std::holds_alternative<EkfOptions>(spec.filter);
   if (!(spec.kind() == FilterKind::kKf || (ekf && !spec.iterated())))
-    throw InputError("--estimator als supports the kf and the ekf (linearised along its own "
-                     "estimates), not " + std::string(FilterKindName(spec.kind())));
+    throw InputError(
+        "--estimator als supports the kf and the ekf (linearised along its own "
+        "estimates), not " +
+        std::string(FilterKindName(spec.kind())));
   const CovarianceParam<N>& qp = lik.q_param();
   const CovarianceParam<M>& rp = lik.r_param();
-  const FreeElements<N> fq =
-      FreeElementsOf<N>(qp, "q", likelihood_internal::StateNames<Model>());
-  const FreeElements<M> fr =
-      FreeElementsOf<M>(rp, "r", likelihood_internal::OutputNames<Meas>());
+  const FreeElements<N> fq = FreeElementsOf<N>(qp, "q", likelihood_internal::StateNames<Model>());
+  const FreeElements<M> fr = FreeElementsOf<M>(rp, "r", likelihood_internal::OutputNames<Meas>());
   const int nq = int(fq.basis.size()), np = nq + int(fr.basis.size());
   const int lags = options.als_lags;
   const int rows = lags * M * M;
@@ -339,8 +353,9 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     if (qp.kind() != NoiseParam::kFixed) return Mat<N, N>::Zero();
     return qp.template Matrix<double>(nullptr, dt);
   };
-  const Mat<M, M> r_fixed =
-      rp.kind() == NoiseParam::kFixed ? rp.template Matrix<double>(nullptr, 0.0) : Mat<M, M>::Zero();
+  const Mat<M, M> r_fixed = rp.kind() == NoiseParam::kFixed
+                                ? rp.template Matrix<double>(nullptr, 0.0)
+                                : Mat<M, M>::Zero();
   const auto zero_q = [](double) { return Mat<N, N>::Zero().eval(); };
   const Mat<M, M> zero_r = Mat<M, M>::Zero();
   for (const FilterData& d : datasets) {
@@ -378,20 +393,10 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     cost->AddParameterBlock(k);
     cost->SetNumResiduals(rows);
     problem.AddResidualBlock(cost, nullptr, theta.data());
-    for (int i = 0; i < k; ++i) {
-      if (std::isfinite(lower[i])) problem.SetParameterLowerBound(theta.data(), i, lower[i]);
-      if (std::isfinite(upper[i])) problem.SetParameterUpperBound(theta.data(), i, upper[i]);
-    }
+    SetBounds(lower, upper, theta.data(), &problem);
   }
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = options.max_iterations;
-  so.function_tolerance = options.function_tolerance;
-  so.gradient_tolerance = options.gradient_tolerance;
-  so.parameter_tolerance = options.parameter_tolerance;
-  so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  if (k > 0) ceres::Solve(so, &problem, &summary);
+  if (k > 0) ceres::Solve(LevenbergMarquardtOptions(options), &problem, &summary);
   TuneStart start;
   start.theta_start = result.theta_initial;
   start.theta_end = theta;

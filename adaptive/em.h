@@ -269,8 +269,7 @@ std::vector<double> MStepTheta(const InnovationLikelihood<Model, Meas>& lik,
   InitialCovariance<M> r_now;
   r_now.matrix = rp.template Matrix<double>(theta.data() + qp.NumParams(), 0.0);
   const CovarianceParam<N> q_next(
-      qp.kind(), "q", likelihood_internal::StateNames<Model>(),
-      likelihood_internal::Pairs<Model>(),
+      qp.kind(), "q", likelihood_internal::StateNames<Model>(), likelihood_internal::Pairs<Model>(),
       MStep<N>(qp.kind(), sums.a, sums.transitions, sums.white, sums.white_dims, q_now),
       lik.dt_ref());
   const CovarianceParam<M> r_next(rp.kind(), "r", likelihood_internal::OutputNames<Meas>(), {},
@@ -340,10 +339,9 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
   start.theta_end = best;
   start.nll_end = start.ok ? best_nll : kInf;
   start.termination =
-      converged ? "relative NLL change below " + FormatNumber(options.em_tolerance)
-      : why.empty()
-          ? "iteration limit (" + std::to_string(options.max_iterations) + ") reached"
-          : "stopped at iteration " + std::to_string(start.iterations + 1) + ": " + why;
+      converged     ? "relative NLL change below " + FormatNumber(options.em_tolerance)
+      : why.empty() ? "iteration limit (" + std::to_string(options.max_iterations) + ") reached"
+                    : "stopped at iteration " + std::to_string(start.iterations + 1) + ": " + why;
   result.starts.push_back(start);
   result.iterations = start.iterations;
   result.termination = start.termination;
@@ -357,11 +355,11 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
   result.status = converged ? TuneStatus::kConverged : TuneStatus::kNoConvergence;
   result.theta = best;
   result.nll_tuned = best_nll;
-  result.message = "EM, " + std::to_string(start.iterations) + " iteration(s)" +
-                   (result.nll_increases
-                        ? ", the NLL rose at " + std::to_string(result.nll_increases) +
-                              " (the E-step is approximate for this filter)"
-                        : "");
+  result.message =
+      "EM, " + std::to_string(start.iterations) + " iteration(s)" +
+      (result.nll_increases ? ", the NLL rose at " + std::to_string(result.nll_increases) +
+                                  " (the E-step is approximate for this filter)"
+                            : "");
   if (options.em_compare_ml && !best.empty()) {
     bool ml_converged = false;
     const TuneStart ml = RunLbfgs(objective, options, lower, upper, best, &ml_converged);

@@ -127,8 +127,7 @@ class InnovationLikelihood {
   // points: the noise-free process map x -> x- (the KF's linearised,
   // discretised map; else Phi, fixed-step or CVODES) and the measurement
   // residual wrap(z - h(x)) (the KF's linearised h).
-  Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1,
-                                  double u) const {
+  Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1, double u) const {
     if (!kf_) return Propagate<double>(x, t0, t1, u, params_, nullptr);
     const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
     if (step == nullptr)  // SetUpKf saw every step of the data
@@ -142,8 +141,8 @@ class InnovationLikelihood {
   Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x) const {
     Vec<double, kM> z_pred;
     if (kf_) {  // h(x*) + H wrap(x - x*), as KfUpdate
-      z_pred = kf_lin_.h_star +
-               kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates);
+      z_pred =
+          kf_lin_.h_star + kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates);
     } else {
       z_pred = Meas::template Eval<double>(x, params_);
     }

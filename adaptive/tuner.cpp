@@ -89,7 +89,8 @@ bool TunerOptions::IsValid(std::string* error) const {
     if (!(em_tolerance >= 0 && std::isfinite(em_tolerance)))
       return fail("EM tolerance must be finite and >= 0, got " + FormatNumber(em_tolerance));
     if (burn_in != 0)
-      return fail("EM maximises the likelihood of every update: burn-in applies to the ml estimator");
+      return fail(
+          "EM maximises the likelihood of every update: burn-in applies to the ml estimator");
     if (starts != 1) return fail("EM runs from the initial guess only (starts 1)");
     if (!estimate.empty())
       return fail("EM estimates Q and R only; physical parameters need the ml estimator");

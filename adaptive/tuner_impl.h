@@ -372,6 +372,29 @@ TuneStart RunLbfgs(const Objective<Model, Meas>& objective, const TunerOptions& 
   return start;
 }
 
+// The Levenberg-Marquardt settings of the least-squares form (and ALS).
+inline ceres::Solver::Options LevenbergMarquardtOptions(const TunerOptions& o) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = o.function_tolerance;
+  so.gradient_tolerance = o.gradient_tolerance;
+  so.parameter_tolerance = o.parameter_tolerance;
+  so.logging_type = ceres::SILENT;
+  so.num_threads = 1;
+  return so;
+}
+
+// The finite bounds on the parameter block theta.
+inline void SetBounds(const std::vector<double>& lower, const std::vector<double>& upper,
+                      double* theta, ceres::Problem* problem) {
+  for (size_t i = 0; i < lower.size(); ++i) {
+    if (std::isfinite(lower[i])) problem->SetParameterLowerBound(theta, int(i), lower[i]);
+    if (std::isfinite(upper[i])) problem->SetParameterUpperBound(theta, int(i), upper[i]);
+  }
+}
+
 template <class Model, class Meas>
 TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOptions& o,
                           const std::vector<double>& lower, const std::vector<double>& upper,
@@ -390,21 +413,9 @@ TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOp
   const double c = std::max(0.0, o.log_det_margin * num_meas - min_log_det);
   ceres::Problem problem;
   problem.AddResidualBlock(new LeastSquaresCost<Model, Meas>(objective, c), nullptr, theta.data());
-  for (int i = 0; i < objective.NumParams(); ++i) {
-    if (std::isfinite(lower[i])) problem.SetParameterLowerBound(theta.data(), i, lower[i]);
-    if (std::isfinite(upper[i])) problem.SetParameterUpperBound(theta.data(), i, upper[i]);
-  }
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.max_num_iterations = o.max_iterations;
-  so.function_tolerance = o.function_tolerance;
-  so.gradient_tolerance = o.gradient_tolerance;
-  so.parameter_tolerance = o.parameter_tolerance;
-  so.logging_type = ceres::SILENT;
-  so.num_threads = 1;
+  SetBounds(lower, upper, theta.data(), &problem);
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  ceres::Solve(LevenbergMarquardtOptions(o), &problem, &summary);
   start.theta_end = theta;
   start.termination = summary.message;
   start.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;

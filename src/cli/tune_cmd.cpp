@@ -260,8 +260,8 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
               << (r.nll_increases ? ", NLL rose at " + std::to_string(r.nll_increases) : "")
               << ")\n";
   } else {
-    std::cout << "Ceres         " << r.termination << " (" << r.iterations
-              << " iterations, start " << r.best_start + 1 << ")\n";
+    std::cout << "Ceres         " << r.termination << " (" << r.iterations << " iterations, start "
+              << r.best_start + 1 << ")\n";
   }
   std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n";
   if (!std::isnan(r.nll_ml_from_em))
@@ -444,9 +444,8 @@ int RunTune(const std::vector<std::string>& args) {
       "estimator", po::value<std::string>()->default_value("ml"),
       "ml (prediction-error maximum likelihood, Ceres) | em (expectation-maximisation, the "
       "smoother as E-step) | als (autocovariance least squares, kf/ekf) | output-error (free "
-      "simulation, least squares)")(
-      "lags", po::value<int>()->default_value(10),
-      "als: innovation autocovariance lags 0..N-1 fitted")(
+      "simulation, least squares)")("lags", po::value<int>()->default_value(10),
+                                    "als: innovation autocovariance lags 0..N-1 fitted")(
       "tolerance", po::value<std::string>()->default_value("1e-9"),
       "em: stop when the relative NLL change is at most this")(
       "horizon", po::value<std::string>()->default_value("0.5"),
@@ -529,8 +528,8 @@ int RunTune(const std::vector<std::string>& args) {
     throw InputError("--lags applies to --estimator als");
   }
   options.max_iterations = vm.count("max-iterations") ? vm["max-iterations"].as<int>()
-                           : estimator == "em"         ? 1000
-                                                       : 200;
+                           : estimator == "em"        ? 1000
+                                                      : 200;
   if (estimator == "em") {
     if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
     options.form = TunerForm::kEm;

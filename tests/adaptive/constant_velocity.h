@@ -8,6 +8,7 @@
 
 #include "src/core/params.h"
 #include "src/core/types.h"
+#include "src/run/filter_spec.h"
 
 namespace estlab::testing {
 
@@ -75,6 +76,21 @@ struct ConstantVelocity {
   };
   using Measurements = std::tuple<Positions>;
 };
+
+// The one-axis model's filter spec: x0 = (0, 1), P0 = I, white-accel Q
+// (qc0) and R = r0, the Euler transition.
+inline FilterSpec CvSpec(double qc0, double r0, FilterKindOptions filter = EkfOptions{}) {
+  FilterSpec spec;
+  spec.measurement = "positions";
+  spec.filter = filter;
+  spec.transition.integrator = Integrator::kEuler;
+  spec.x0 = {0.0, 1.0};
+  spec.p0 = {1.0, 0.0, 0.0, 1.0};
+  spec.q_white_accel = true;
+  spec.qc = qc0;
+  spec.r = {r0};
+  return spec;
+}
 
 }  // namespace estlab::testing
 

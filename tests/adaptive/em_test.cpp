@@ -41,22 +41,9 @@ double WorstRise(const std::vector<double>& history) {
   return worst;
 }
 
-FilterSpec CvKfSpec(double qc0, double r0) {
-  FilterSpec spec;
-  spec.measurement = "positions";
-  spec.filter = KfOptions{};
-  spec.transition.integrator = Integrator::kEuler;
-  spec.x0 = {0.0, 1.0};
-  spec.p0 = {1.0, 0.0, 0.0, 1.0};
-  spec.q_white_accel = true;
-  spec.qc = qc0;
-  spec.r = {r0};
-  return spec;
-}
-
 TEST(EmLinear, LikelihoodNeverFallsAndEmReachesTheLikelihoodTunersOptimum) {
   const double dt = 0.1, qc_true = 0.5, r_true = 0.04;
-  const FilterSpec spec = CvKfSpec(5.0, 1.0);  // x10 and x25 off
+  const FilterSpec spec = testing::CvSpec(5.0, 1.0, KfOptions{});  // x10 and x25 off
   TunerOptions ml;
   ml.q_param = NoiseParam::kWhiteAccel;
   ml.r_param = NoiseParam::kDiag;
@@ -81,8 +68,8 @@ TEST(EmLinear, LikelihoodNeverFallsAndEmReachesTheLikelihoodTunersOptimum) {
     worst_gap = std::max(worst_gap, gap);
     worst_nll_gap = std::max(worst_nll_gap, e.nll_tuned - m.nll_tuned);
     iterations = std::max(iterations, e.iterations);
-    EXPECT_LT(gap, 1e-4) << "dataset " << d << ": EM qc " << e.qc << " R " << e.r[0]
-                         << ", ml qc " << m.qc << " R " << m.r[0];
+    EXPECT_LT(gap, 1e-4) << "dataset " << d << ": EM qc " << e.qc << " R " << e.r[0] << ", ml qc "
+                         << m.qc << " R " << m.r[0];
     EXPECT_LE(std::abs(e.nll_ml_from_em - m.nll_tuned), 1e-6 * std::abs(m.nll_tuned));
   }
   std::printf(
@@ -105,9 +92,8 @@ TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
   spec.p0 = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   spec.q = {1e-3, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 1e-3, 0, 0, 0, 0, 0.1};
   spec.r = {0.2, 0.0, 0.0, 0.2};
-  const std::vector<FilterData> data = {
-      Simulate<Cv2, Cv2::Positions>(Integrator::kEuler, Vec<double, 4>(0.0, 1.0, 0.0, -0.5), dt,
-                                    3000, Q, R, 77)};
+  const std::vector<FilterData> data = {Simulate<Cv2, Cv2::Positions>(
+      Integrator::kEuler, Vec<double, 4>(0.0, 1.0, 0.0, -0.5), dt, 3000, Q, R, 77)};
   TunerOptions ml;
   ml.q_param = NoiseParam::kDiag;
   ml.r_param = NoiseParam::kFull;
@@ -130,7 +116,8 @@ TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
   for (int i = 0; i < 4; ++i)
     std::printf("  q%d EM %.6g ml %.6g\n", i, e.q[i * 4 + i], m.q[i * 4 + i]);
   for (int i = 0; i < 4; ++i) std::printf("  r%d EM %.6g ml %.6g\n", i, e.r[i], m.r[i]);
-  std::printf("  NLL EM %.6f ml %.6f ml-from-EM %.6f\n", e.nll_tuned, m.nll_tuned, e.nll_ml_from_em);
+  std::printf("  NLL EM %.6f ml %.6f ml-from-EM %.6f\n", e.nll_tuned, m.nll_tuned,
+              e.nll_ml_from_em);
   std::printf("  diag Q, full R: %d EM iterations (%.2f ms each), worst relative gap to ml %.3g\n",
               e.iterations, 1e3 * per_iteration, gap);
   EXPECT_LT(gap, 1e-4);
@@ -139,9 +126,9 @@ TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
 TEST(EmPendulum, ApproximateEStepLowersTheNllAndReportsTheMlOptimumBeside) {
   using P = models::Pendulum;
   const double dt = 0.01;
-  const std::vector<FilterData> data = {Simulate<P, P::Sin>(
-      Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), dt, 1000,
-      Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 5)};
+  const std::vector<FilterData> data = {
+      Simulate<P, P::Sin>(Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), dt, 1000,
+                          Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 5)};
   FilterSpec spec;
   spec.measurement = "sin";
   spec.filter = EkfOptions{};

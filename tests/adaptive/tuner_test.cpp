@@ -40,6 +40,7 @@ namespace estlab {
 namespace {
 
 using testing::ConstantVelocity;
+using testing::CvSpec;
 using Cv = ConstantVelocity<1>;
 using Cv2 = ConstantVelocity<2>;
 
@@ -58,19 +59,6 @@ std::vector<double> Flat(const Mat<R, C>& A) {
 
 // ---------------------------------------------------------------------------
 // 1. Linear model: truth within 2 SE, NLL(tuned) <= NLL(true).
-
-FilterSpec CvSpec(double qc0, double r0) {
-  FilterSpec spec;
-  spec.measurement = "positions";
-  spec.filter = EkfOptions{};
-  spec.transition.integrator = Integrator::kEuler;
-  spec.x0 = {0.0, 1.0};
-  spec.p0 = {1.0, 0.0, 0.0, 1.0};
-  spec.q_white_accel = true;
-  spec.qc = qc0;
-  spec.r = {r0};
-  return spec;
-}
 
 TEST(TunerLinear, RecoversTruthWithinTwoStandardErrors) {
   const double dt = 0.1, qc_true = 2.0, r_true = 0.25;
