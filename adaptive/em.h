@@ -326,7 +326,9 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     result.nll_increases += change > 1e-12 * std::abs(nll_next);
     result.nll_history.push_back(nll_next);
     result.iteration_wall_s.push_back(std::chrono::duration<double>(Clock::now() - t_it).count());
-    if (options.progress) options.progress(start.iterations, nll_next, change);
+    if (options.progress)
+      options.progress({.phase = "em", .iteration = start.iterations, .value = nll_next,
+                        .change = change});
     theta = next;
     nll = nll_next;
     if (nll < best_nll) best = theta, best_nll = nll;
@@ -362,7 +364,8 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
                             : "");
   if (options.em_compare_ml && !best.empty()) {
     bool ml_converged = false;
-    const TuneStart ml = RunLbfgs(objective, options, lower, upper, best, &ml_converged);
+    const TuneStart ml = RunLbfgs(objective, options, lower, upper, best, &ml_converged,
+                                  {.phase = "ml from EM's solution"});
     if (ml.ok) result.nll_ml_from_em = ml.nll_end;
   }
   FinishTune(objective, spec, options, lower, upper, &result);

@@ -81,6 +81,16 @@ struct EstimatedParam {
   double prior_mean = 0.0, prior_sd = 0.0;
 };
 
+// What TunerOptions::progress reports after each iteration.
+struct TuneProgress {
+  const char* phase = "";     // "start" (ml), "em", "als", "ml from EM's solution"
+  int start = 0, starts = 0;  // the multi-start's start (1-based) of how many; 0 for EM, ALS
+  int iteration = 0;          // 1, 2, ... within this start
+  const char* objective = "NLL";  // what `value` is: "NLL", or "cost" (least squares)
+  double value = 0.0;
+  double change = 0.0;  // value minus the previous iteration's
+};
+
 struct TunerOptions {
   NoiseParam q_param = NoiseParam::kDiag;
   NoiseParam r_param = NoiseParam::kDiag;
@@ -134,9 +144,10 @@ struct TunerOptions {
   // approximation on a nonlinear one).
   double em_tolerance = 1e-9;
   bool em_compare_ml = true;
-  // Called after every EM iteration (1, 2, ...) with its NLL and the change
-  // from the previous one (the CLI prints it on a terminal). May be empty.
-  std::function<void(int iteration, double nll, double change)> progress;
+  // Called after every iteration of the optimiser (each start of the
+  // multi-start, EM, ALS) with where it is (the CLI prints it on a
+  // terminal). May be empty.
+  std::function<void(const TuneProgress&)> progress;
 
   // ALS (form kAls): the lags 0 .. als_lags - 1 of the innovation
   // autocovariances fitted; burn_in updates of the suboptimal filter are
@@ -184,6 +195,8 @@ struct TuneResult {
   std::vector<double> theta_initial, theta;
   std::vector<double> std_errors;
   std::vector<bool> poorly_identified;
+  // At or near a bound (AtBound, tuner_impl.h): the estimate and its SE
+  // are the search box's, not the data's.
   std::vector<bool> at_bound;
   bool hessian_positive_definite = false;
 

@@ -31,7 +31,7 @@
 // Bounds: the least-squares form has native bounds; for L-BFGS
 // (GradientProblemSolver has none) the NLL is continued outside the box by a
 // C^1 linear-plus-quadratic penalty and the result clamped (NllFunction). A
-// parameter that ends on a bound is flagged at_bound.
+// parameter that ends at or near a bound is flagged at_bound (AtBound).
 //
 // Standard errors: H = central differences of the exact gradient at the
 // optimum (step options.hessian_step), symmetrised; cov = H^-1 by Cholesky
@@ -344,14 +344,36 @@ double ScaleSearch(const Objective<Model, Meas>& objective, const std::vector<do
   return std::min(fc, fd) < best_f ? s : best_s;
 }
 
+// Forwards every Ceres iteration (after the zeroth, the start point) to
+// TunerOptions::progress, with `where` saying which start it is.
+class ProgressCallback final : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const TunerOptions& o, const TuneProgress& where) : o_(o), where_(where) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+    if (it.iteration > 0 && o_.progress) {
+      where_.iteration = it.iteration;
+      where_.value = it.cost;
+      where_.change = -it.cost_change;
+      o_.progress(where_);
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const TunerOptions& o_;
+  TuneProgress where_;
+};
+
 template <class Model, class Meas>
 TuneStart RunLbfgs(const Objective<Model, Meas>& objective, const TunerOptions& o,
                    const std::vector<double>& lower, const std::vector<double>& upper,
-                   std::vector<double> theta, bool* converged) {
+                   std::vector<double> theta, bool* converged, const TuneProgress& where) {
   TuneStart start;
   start.theta_start = theta;
   ceres::GradientProblem problem(new NllFunction<Model, Meas>(objective, lower, upper));
+  ProgressCallback progress(o, where);
   ceres::GradientProblemSolver::Options so;
+  so.callbacks.push_back(&progress);
   so.line_search_direction_type = ceres::LBFGS;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
@@ -370,6 +392,19 @@ TuneStart RunLbfgs(const Objective<Model, Meas>& objective, const TunerOptions& 
   if (!start.ok) start.nll_end = kInf;
   *converged = summary.termination_type == ceres::CONVERGENCE;
   return start;
+}
+
+// Whether theta ends at or near one of its bounds: within 0.1 on the log
+// scale (a factor e^0.1 = 1.105 on the natural scale), within 1e-3 of the
+// box width on the natural scale. An optimiser stopping by its tolerances
+// lands short of a bound the likelihood pushes against (log q ending at
+// -38.37 against -38.42), so "on the bound" alone misses it.
+inline bool AtBound(double theta, double lower, double upper, bool is_log) {
+  const double width = upper - lower;
+  const double tol = is_log                 ? 0.1
+                     : std::isfinite(width) ? 1e-3 * width
+                                            : 1e-6 * std::max(1.0, std::abs(theta));
+  return std::abs(theta - lower) <= tol || std::abs(theta - upper) <= tol;
 }
 
 // The Levenberg-Marquardt settings of the least-squares form (and ALS).
@@ -398,7 +433,8 @@ inline void SetBounds(const std::vector<double>& lower, const std::vector<double
 template <class Model, class Meas>
 TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOptions& o,
                           const std::vector<double>& lower, const std::vector<double>& upper,
-                          std::vector<double> theta, int num_meas, bool* converged) {
+                          std::vector<double> theta, int num_meas, bool* converged,
+                          const TuneProgress& where) {
   TuneStart start;
   start.theta_start = theta;
   *converged = false;
@@ -414,8 +450,11 @@ TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOp
   ceres::Problem problem;
   problem.AddResidualBlock(new LeastSquaresCost<Model, Meas>(objective, c), nullptr, theta.data());
   SetBounds(lower, upper, theta.data(), &problem);
+  ProgressCallback progress(o, where);
+  ceres::Solver::Options so = LevenbergMarquardtOptions(o);
+  so.callbacks.push_back(&progress);
   ceres::Solver::Summary summary;
-  ceres::Solve(LevenbergMarquardtOptions(o), &problem, &summary);
+  ceres::Solve(so, &problem, &summary);
   start.theta_end = theta;
   start.termination = summary.message;
   start.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
@@ -566,9 +605,7 @@ void FinishTune(const Objective<Model, Meas>& objective, const FilterSpec& spec,
       limit = std::sqrt(in_q ? Q(off_row[i], off_row[i]) : R(off_row[i], off_row[i]));
     }
     result.poorly_identified.push_back(!(result.std_errors[i] <= limit));
-    const double tol = 1e-6 * std::max(1.0, std::abs(result.theta[i]));
-    result.at_bound.push_back(std::abs(result.theta[i] - lower[i]) <= tol ||
-                              std::abs(result.theta[i] - upper[i]) <= tol);
+    result.at_bound.push_back(AtBound(result.theta[i], lower[i], upper[i], result.is_log[i]));
   }
 }
 
@@ -652,9 +689,16 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
       conv = st.ok;
       result.starts.push_back(st);
     } else if (options.form == TunerForm::kLbfgs) {
-      result.starts.push_back(RunLbfgs(objective, options, lower, upper, from, &conv));
+      const TuneProgress where{
+          .phase = "start", .start = int(s) + 1, .starts = int(points.size())};
+      result.starts.push_back(RunLbfgs(objective, options, lower, upper, from, &conv, where));
     } else {
-      result.starts.push_back(RunLeastSquares(objective, options, lower, upper, from, M, &conv));
+      const TuneProgress where{.phase = "start",
+                               .start = int(s) + 1,
+                               .starts = int(points.size()),
+                               .objective = "cost"};
+      result.starts.push_back(
+          RunLeastSquares(objective, options, lower, upper, from, M, &conv, where));
     }
     result.starts.back().theta_start = points[s];
     result.starts.back().scale_shift = shift;

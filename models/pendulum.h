@@ -84,7 +84,19 @@ struct Pendulum {
       return Vec<T, 1>(sin(x(0)));
     }
   };
-  using Measurements = std::tuple<Angle, Sin>;
+  // Both states (theta from the encoder and omega, e.g. its finite
+  // difference or a gyro), as the double pendulum's `full`.
+  struct Full {
+    static constexpr const char* kName = "full";
+    static constexpr int kDim = 2;
+    static constexpr std::array<const char*, 2> kOutputs = {"theta", "omega"};
+    static constexpr std::array<bool, 2> kAngleOutputs = {true, false};
+    template <class T, class P>
+    static Vec<T, 2> Eval(const Vec<T, 2>& x, const P& /*p*/) {
+      return x;
+    }
+  };
+  using Measurements = std::tuple<Angle, Sin, Full>;
 };
 
 }  // namespace estlab::models

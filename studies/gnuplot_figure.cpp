@@ -29,14 +29,16 @@ std::string GnuplotFigure::Write(const std::string& png_terminal, int width, int
      << "# data: " << name_ << ".dat\n"
      << "do for [fmt in \"png svg\"] {\n"
      << "  if (fmt eq \"png\") {\n"
-     << "    set terminal " << png_terminal << " noenhanced size " << width << "," << height
+     << "    set terminal " << png_terminal << " enhanced size " << width << "," << height
      << "\n  } else {\n"
-     << "    set terminal svg noenhanced size " << width << "," << height << " dynamic\n"
+     << "    set terminal svg enhanced size " << width << "," << height << " dynamic\n"
      << "  }\n"
      << "  set output '" << name_ << ".'.fmt\n"
      << "  reset\n"
      << "  set grid\n"
-     << "  set key outside right top\n"
+     << "  set key outside right top noenhanced\n"
+     << "  set format x '%h'\n"
+     << "  set format y '%h'\n"
      << body_.str() << "  set output\n}\n";
   WriteTextFile(folder_ + "/" + name_ + ".gp", gp.str());
   return folder_ + "/" + name_ + ".gp";
@@ -61,6 +63,25 @@ bool RenderFigure(const std::string& script, const std::string& gnuplot, std::st
   if (status == 0) return true;
   *message = "gnuplot failed on " + script + ": " + log;
   return false;
+}
+
+std::string GnuplotText(const std::string& text) { return GnuplotQuote(text) + " noenhanced"; }
+
+std::string GnuplotLogAxis(const std::string& axis) {
+  return "  set logscale " + axis + "\n  set format " + axis + " '10^{%L}'\n";
+}
+
+std::string ScriptTerminal(const FiguresOptions& options, std::string* message) {
+  if (!options.render) return "pngcairo";
+  const std::string term = PngTerminal(options.gnuplot, message);
+  return term.empty() ? "pngcairo" : term;
+}
+
+void RenderFigures(const FiguresOptions& options, FiguresSummary* f) {
+  if (!options.render || !f->message.empty()) return;
+  for (const auto& script : f->scripts)
+    if (!RenderFigure(script, options.gnuplot, &f->message)) return;
+  f->rendered = true;
 }
 
 std::string GnuplotQuote(const std::string& s) {

@@ -28,6 +28,15 @@ constexpr const char* kColors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
 
 std::string Color(size_t i) { return kColors[i % (sizeof kColors / sizeof kColors[0])]; }
 
+// Line j of a figure with several filter x noise lines: its colour, its own
+// dash pattern and its own marker every `point_every` rows, so that lines
+// that coincide still show every legend entry.
+std::string LineStyle(size_t j, size_t point_every) {
+  return "with linespoints lw 1.5 lc rgb '" + Color(j) + "' dt " + std::to_string(1 + j % 5) +
+         " pt " + std::to_string(1 + j % 7) + " ps 0.8 pi " +
+         std::to_string(std::max<size_t>(1, point_every));
+}
+
 std::string DatValue(const std::string& s) { return s.empty() ? "NaN" : s; }
 
 // "theta [rad]": the state's unit as its model header states it
@@ -61,96 +70,119 @@ std::vector<ComboName> Combos(const StudyConfig& c, const ScenarioConfig& sc) {
   return out;
 }
 
+// Estimate vs truth with the +-2 sd band in one kept run, and the
+// measurements: as points on the panel of the state an output is named
+// after (pendulum angle: theta), else on a panel of their own (sin_theta).
 void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, const std::string& csv,
                     const std::string& folder, const std::string& term,
                     std::vector<std::string>* scripts) {
   const CsvTable ts = ReadCsv(csv);
   const auto& states = sc.model->states;
+  std::vector<std::string> outputs;  // those the time series has (older folders: none)
+  for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+    if (ts.ColumnIndex("z_" + o) >= 0) outputs.push_back(o);
   Figure fig(folder,
              sc.name + "_estimate_run" + std::to_string(run) + "_" + cn.filter + "_" + cn.noise);
   fig.dat() << "# " << sc.name << " run " << run << ", " << cn.label() << ": t";
   for (const auto& s : states)
     fig.dat() << " " << s << "_true " << s << "_est " << s << "_lo2sd " << s << "_hi2sd";
+  for (const auto& o : outputs) fig.dat() << " z_" << o;
   fig.dat() << "\n";
   for (const auto& row : ts.rows) {
     fig.dat() << FormatDouble(row[0]);
+    auto put = [&](const std::string& column) {
+      const double v = row[ts.ColumnIndex(column)];
+      fig.dat() << " " << (std::isfinite(v) ? FormatDouble(v) : "NaN");
+    };
     for (const auto& s : states)
-      for (const char* suffix : {"_true", "_est", "_lo2sd", "_hi2sd"}) {
-        const double v = row[ts.ColumnIndex(s + suffix)];
-        fig.dat() << " " << (std::isfinite(v) ? FormatDouble(v) : "NaN");
-      }
+      for (const char* suffix : {"_true", "_est", "_lo2sd", "_hi2sd"}) put(s + suffix);
+    for (const auto& o : outputs) put("z_" + o);
     fig.dat() << "\n";
   }
+  const size_t z0 = 2 + 4 * states.size();  // first measurement column
+  std::vector<size_t> own_panel;             // outputs not named like a state
+  for (size_t j = 0; j < outputs.size(); ++j)
+    if (sc.model->StateIndex(outputs[j]) < 0) own_panel.push_back(j);
+  const size_t panels = states.size() + own_panel.size();
+  const std::string points = " with points pt 7 ps 0.35 lc rgb '#7f7f7f' title 'measurement'";
   auto& b = fig.body();
-  b << "  set multiplot layout " << states.size() << ",1 title "
-    << GnuplotQuote(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
-                    (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
+  b << "  set multiplot layout " << panels << ",1 title "
+    << GnuplotText(sc.name + ", run " + std::to_string(run) + ": " + cn.label() +
+                   (sc.has_truth ? " estimate vs truth" : " estimate (recorded data, no truth)"))
     << "\n";
   for (size_t i = 0; i < states.size(); ++i) {
     const size_t c0 = 2 + 4 * i;  // true, est, lo, hi columns
-    b << "  set ylabel " << GnuplotQuote(Label(sc.model->name, states[i])) << "\n"
-      << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
+    b << "  set ylabel " << GnuplotText(Label(sc.model->name, states[i])) << "\n"
+      << (i + 1 == panels ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot "
       << GnuplotQuote(fig.dat_name()) << " using 1:" << c0 + 2 << ":" << c0 + 3
-      << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd', \\\n"
-      << (sc.has_truth ? "       '' using 1:" + std::to_string(c0) +
-                             " with lines lw 2 lc rgb 'black' title 'truth', \\\n"
-                       : std::string())
-      << "       '' using 1:" << c0 + 1 << " with lines lw 1.5 lc rgb '#1f77b4' title 'estimate'\n";
+      << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd'";
+    for (size_t j = 0; j < outputs.size(); ++j)
+      if (outputs[j] == states[i]) b << ", \\\n       '' using 1:" << z0 + j << points;
+    if (sc.has_truth) b << ", \\\n       '' using 1:" << c0 << " with lines lw 2 lc rgb 'black' title 'truth'";
+    b << ", \\\n       '' using 1:" << c0 + 1
+      << " with lines lw 1.5 lc rgb '#1f77b4' title 'estimate'\n";
+  }
+  for (size_t p = 0; p < own_panel.size(); ++p) {
+    const size_t j = own_panel[p];
+    b << "  set ylabel " << GnuplotText("z " + outputs[j]) << "\n"
+      << (states.size() + p + 1 == panels ? "  set xlabel 't [s]'\n" : "  unset xlabel\n")
+      << "  plot " << GnuplotQuote(fig.dat_name()) << " using 1:" << z0 + j << points << "\n";
   }
   b << "  unset multiplot\n";
-  scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
+  scripts->push_back(fig.Write(term, 900, 300 * int(panels) + 60));
 }
 
 // One panel per state, one line per block j of the figure's .dat (t in
 // column 1, state i in column i + 2), the y label WHAT + state with its unit.
 void StatePanels(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
-                 const std::vector<size_t>& blocks, const std::string& what, Figure* fig) {
+                 const std::vector<size_t>& blocks, const std::string& what, size_t point_every,
+                 Figure* fig) {
   const auto& states = sc.model->states;
   auto& b = fig->body();
   for (size_t i = 0; i < states.size(); ++i) {
-    b << "  set ylabel " << GnuplotQuote(Label(sc.model->name, what + states[i])) << "\n"
+    b << "  set ylabel " << GnuplotText(Label(sc.model->name, what + states[i])) << "\n"
       << (i + 1 == states.size() ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
     for (size_t j = 0; j < blocks.size(); ++j)
       b << (j ? ", \\\n       " : "") << GnuplotQuote(fig->dat_name()) << " index " << j
-        << " using 1:" << i + 2 << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << GnuplotQuote(combos[blocks[j]].label());
+        << " using 1:" << i + 2 << " " << LineStyle(j, point_every) << " title "
+        << GnuplotText(combos[blocks[j]].label());
     b << "\n";
   }
 }
 
 void RmseTimeFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
-                    const std::vector<size_t>& blocks, const std::string& term, Figure* fig,
-                    std::vector<std::string>* scripts) {
+                    const std::vector<size_t>& blocks, size_t point_every, const std::string& term,
+                    Figure* fig, std::vector<std::string>* scripts) {
   const auto& states = sc.model->states;
   Figure& rmse = *fig;
   auto& b = rmse.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << GnuplotQuote(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
-  StatePanels(sc, combos, blocks, "RMSE ", &rmse);
+    << GnuplotText(sc.name + ": RMSE over time across runs (filter/noise)") << "\n";
+  StatePanels(sc, combos, blocks, "RMSE ", point_every, &rmse);
   b << "  unset multiplot\n";
   scripts->push_back(rmse.Write(term, 900, 300 * int(states.size()) + 60));
 }
 
 // Mean NEES and NIS over time with their bounds; NIS only without truth.
 void ConsistencyFigure(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
-                       const std::vector<size_t>& blocks, const std::string& term, Figure* fig,
-                       std::vector<std::string>* scripts) {
+                       const std::vector<size_t>& blocks, size_t point_every,
+                       const std::string& term, Figure* fig, std::vector<std::string>* scripts) {
   Figure& cons = *fig;
   auto& c = cons.body();
   c << "  set multiplot layout " << (sc.has_truth ? 2 : 1) << ",1 title "
-    << GnuplotQuote(sc.name +
+    << GnuplotText(sc.name +
                     (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
                     " across runs, 95 % bounds dashed")
     << "\n"
-    << "  set logscale y\n";
+    << GnuplotLogAxis("y");
   for (int panel = sc.has_truth ? 0 : 1; panel < 2; ++panel) {
     const int col = panel == 0 ? 2 : 5;
-    c << "  set ylabel " << GnuplotQuote(panel == 0 ? "NEES" : "NIS") << "\n"
+    c << "  set ylabel " << GnuplotText(panel == 0 ? "NEES" : "NIS") << "\n"
       << (panel == 1 ? "  set xlabel 't [s]'\n" : "  unset xlabel\n") << "  plot ";
     for (size_t j = 0; j < blocks.size(); ++j)
       c << (j ? ", \\\n       " : "") << GnuplotQuote(cons.dat_name()) << " index " << j
-        << " using 1:" << col << " with lines lw 1.5 lc rgb '" << Color(j) << "' title "
-        << GnuplotQuote(combos[blocks[j]].label());
+        << " using 1:" << col << " " << LineStyle(j, point_every) << " title "
+        << GnuplotText(combos[blocks[j]].label());
     c << ", \\\n       '' index 0 using 1:" << col + 1
       << " with lines dt 2 lc rgb 'gray30' title '95 % bounds', \\\n       '' index 0 using 1:"
       << col + 2 << " with lines dt 2 lc rgb 'gray30' notitle\n";
@@ -171,10 +203,13 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
   const char* cons_cols[] = {"mean_nees", "nees_lo95", "nees_hi95",
                              "mean_nis",  "nis_lo95",  "nis_hi95"};
   std::vector<size_t> blocks;  // combos that have data
+  size_t rows_per_block = 0;
   for (size_t k = 0; k < combos.size(); ++k) {
     bool any = false;
+    size_t rows = 0;
     for (const auto& r : tm.rows) {
       if (r[0] != sc.name || r[1] != combos[k].filter || r[2] != combos[k].noise) continue;
+      rows_per_block = std::max(rows_per_block, ++rows);
       if (!any) {
         rmse.dat() << "# " << combos[k].label() << ": t";
         for (const auto& s : states) rmse.dat() << " rmse_" << s;
@@ -197,8 +232,9 @@ void TimeFigures(const ScenarioConfig& sc, const std::vector<ComboName>& combos,
     }
   }
   if (blocks.empty()) return;
-  if (sc.has_truth) RmseTimeFigure(sc, combos, blocks, term, &rmse, scripts);
-  ConsistencyFigure(sc, combos, blocks, term, &cons, scripts);
+  const size_t point_every = rows_per_block / 15;  // about 15 markers per line
+  if (sc.has_truth) RmseTimeFigure(sc, combos, blocks, point_every, term, &rmse, scripts);
+  ConsistencyFigure(sc, combos, blocks, point_every, term, &cons, scripts);
 }
 
 // One panel of MeansFigure: a summary.csv metric and its axis label.
@@ -239,15 +275,15 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   for (const auto& cn : combos) longest = std::max(longest, cn.label().size());
   auto& b = fig.body();
   b << "  set multiplot layout " << panels.size() << ",1 title "
-    << GnuplotQuote(sc.name + ": " + what +
+    << GnuplotText(sc.name + ": " + what +
                     ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
-    << "  set lmargin " << longest + 3 << "\n  unset key\n"
+    << "  set lmargin " << longest + 3 << "\n  unset key\n  set ytics noenhanced\n"
     << "  set palette defined (0 '#1f77b4', 1 '#d62728', 2 '#7f7f7f')\n"
     << "  set cbrange [0:2]\n  unset colorbox\n";
   for (size_t i = 0; i < panels.size(); ++i)
-    b << "  set xlabel " << GnuplotQuote(panels[i].label) << "\n  plot "
+    b << "  set xlabel " << GnuplotText(panels[i].label) << "\n  plot "
       << GnuplotQuote(fig.dat_name()) << " index " << i
       << " using 3:1:4:5:6:ytic(2) with xerrorbars pt 7 ps 1.2 lc palette\n";
   b << "  unset multiplot\n";
@@ -286,11 +322,13 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
   const auto& states = sc.model->states;
   Figure fig(folder, sc.name + "_sigma_run" + std::to_string(run));
   std::vector<size_t> blocks;
+  size_t rows_per_block = 0;
   for (size_t k = 0; k < combos.size(); ++k) {
     const std::string csv = dir + "/timeseries/" + sc.name + "/run" + std::to_string(run) + "_" +
                             combos[k].filter + "_" + combos[k].noise + ".csv";
     if (!fs::exists(csv)) continue;
     const CsvTable ts = ReadCsv(csv);
+    rows_per_block = std::max(rows_per_block, ts.rows.size());
     fig.dat() << "# " << combos[k].label() << ": t";
     for (const auto& s : states) fig.dat() << " sd_" << s;
     fig.dat() << "\n";
@@ -310,10 +348,10 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
   if (blocks.empty()) return;
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
-    << GnuplotQuote(sc.name + ", run " + std::to_string(run) +
+    << GnuplotText(sc.name + ", run " + std::to_string(run) +
                     ": filter standard deviation sqrt(P) over time (log scale)")
-    << "\n  set logscale y\n";
-  StatePanels(sc, combos, blocks, "sd ", &fig);
+    << "\n" << GnuplotLogAxis("y");
+  StatePanels(sc, combos, blocks, "sd ", rows_per_block / 15, &fig);
   b << "  unset multiplot\n";
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
 }
@@ -355,18 +393,19 @@ void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::strin
     }
     auto& b = fig.body();
     b << "  set multiplot layout " << (states.size() + 1) / 2 << ",2 title "
-      << GnuplotQuote(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
-      << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n  set logscale y\n"
-      << "  set xlabel " << GnuplotQuote(key + " (scenario label)")
-      << "\n  set xtics rotate by -40\n  set key inside top left\n";
+      << GnuplotText(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
+      << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n" << GnuplotLogAxis("y")
+      << "  set xlabel " << GnuplotText(key + " (scenario label)")
+      << "\n  set xtics rotate by -40 noenhanced\n  set key inside top left\n";
     for (size_t i = 0; i < states.size(); ++i) {
-      b << "  set ylabel " << GnuplotQuote(Label(first.model->name, "RMSE " + states[i]))
+      b << "  set ylabel " << GnuplotText(Label(first.model->name, "RMSE " + states[i]))
         << "\n  plot ";
       for (size_t j = 0; j < combos.size(); ++j) {
         const size_t index = i * combos.size() + j;
         b << (j ? ", \\\n       " : "") << GnuplotQuote(fig.dat_name()) << " index " << index
-          << " using 1:3:4:5:xticlabels(2) with yerrorlines pt 7 ps 0.8 lw 1.5 lc rgb '" << Color(j)
-          << "' title " << GnuplotQuote(combos[j].label());
+          << " using 1:3:4:5:xticlabels(2) with yerrorlines pt " << 1 + j % 7
+          << " ps 0.8 lw 1.5 dt " << 1 + j % 5 << " lc rgb '" << Color(j) << "' title "
+          << GnuplotText(combos[j].label());
       }
       b << "\n";
     }
@@ -391,11 +430,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
   FiguresSummary out;
   out.folder = dir + "/figures";
   fs::create_directories(out.folder);
-  std::string term = "pngcairo";
-  if (options.render) {
-    term = PngTerminal(options.gnuplot, &out.message);
-    if (term.empty()) term = "pngcairo";
-  }
+  const std::string term = ScriptTerminal(options, &out.message);
   out.terminal = term;
 
   int estimate_figures = 0;
@@ -420,12 +455,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
     MeansFigures(config, sc, combos, summary, out.folder, term, &out.scripts);
   }
   SweepFigures(config, summary, out.folder, term, &out.scripts);
-
-  if (options.render && out.message.empty()) {
-    for (const auto& script : out.scripts)
-      if (!RenderFigure(script, options.gnuplot, &out.message)) return out;
-    out.rendered = true;
-  }
+  RenderFigures(options, &out);
   return out;
 }
 

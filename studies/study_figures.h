@@ -20,21 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "studies/gnuplot_figure.h"
+
 namespace estlab {
-
-struct FiguresOptions {
-  bool render = true;  // false: write .dat and .gp only
-  std::string gnuplot = "gnuplot";
-  int max_estimate_figures = 64;  // estimate-vs-truth figures (first kept run only)
-};
-
-struct FiguresSummary {
-  std::string folder;
-  std::vector<std::string> scripts;  // NAME.gp paths
-  std::string terminal;              // pngcairo or png ("" when not rendered)
-  bool rendered = false;
-  std::string message;  // why not rendered
-};
 
 // Throws InputError when DIR is not a finished study folder.
 FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& options);

@@ -130,8 +130,14 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
   os << "t";
   for (const auto& s : states)
     os << "," << s << "_true," << s << "_est," << s << "_lo2sd," << s << "_hi2sd," << s << "_err";
-  os << ",nees,nis\n";
+  os << ",nees,nis";
+  // The measurements (outputs in the measurement's order), for the
+  // estimate figures.
+  const auto& outputs = sc.model->FindMeasurement(sc.truth.measurement).outputs;
+  for (const auto& o : outputs) os << ",z_" << o;
+  os << "\n";
   const int nees_c = Column(out.columns, "nees"), nis_c = Column(out.columns, "nis");
+  const int m = data.m;
   for (size_t k = 0; k < out.rows.size(); ++k) {
     const auto& r = out.rows[k];
     os << Full(r[0]);
@@ -143,8 +149,10 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
          << Full(est + 2 * sd) << ","
          << Full(data.has_truth ? r[Column(out.columns, states[i] + "_err")] : NAN);
     }
-    os << "," << Full(nees_c >= 0 ? r[nees_c] : NAN) << "," << Full(nis_c >= 0 ? r[nis_c] : NAN)
-       << "\n";
+    os << "," << Full(nees_c >= 0 ? r[nees_c] : NAN) << "," << Full(nis_c >= 0 ? r[nis_c] : NAN);
+    for (size_t j = 0; j < outputs.size(); ++j)
+      os << "," << Full(int(j) < m && k < data.t.size() ? data.z[k * m + j] : NAN);
+    os << "\n";
   }
   file.Commit();
 }

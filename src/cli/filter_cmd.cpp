@@ -1,6 +1,8 @@
 // estlab filter: run one filter over a data file.
 #include <boost/program_options.hpp>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -9,7 +11,10 @@
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/options/filter_flags.h"
+#include "src/options/truth_flags.h"
 #include "src/registry/registry.h"
+#include "src/run/degeneracy.h"
+#include "studies/run_figures.h"
 
 namespace po = boost::program_options;
 
@@ -42,14 +47,21 @@ constexpr const char* kExamples = R"(Examples:
 Data: a CSV with a 't' column and one 'z_<output>' column per output of the
 measurement (what 'estlab simulate --measure' writes); --column ours=theirs maps
 other names, --column ours=[a*]theirs[+-b] also converts (theta=angle-pi,
-theta=0.0174533*angle_deg; a and b numbers or pi). Columns named like the states are the truth: when all are present
-the errors, RMSE/MAE and NEES are computed. An empty or NaN measurement cell
+theta=0.0174533*angle_deg; a and b numbers or pi). Truth: columns named like the states
+are the truth only when the file says so (d.csv.json, written by 'estlab simulate') or
+--truth theta,omega names them (--no-truth: never); then the errors, RMSE/MAE and NEES
+are computed, and the summary says which columns were used. An empty or NaN measurement cell
 means no update at that time. Models with an input read a 'u' column if present
 (else --input). The prior holds at --t0 (default: the first row's time; a --t0 later than
 the first row is refused).
 
-Output: with --out, est.csv with t, <state>_est, <state>_var, nu_<output>, nis, loglik
-[, <state>_err, nees]; a summary table on stdout, or JSON with --json.
+Output: with --out, est.csv with t, <state>_est, <state>_var [, cov_<a>_<b>],
+nu_<output>, S_<output> [, S_<a>_<b>] (the innovation covariance; off-diagonal
+entries with --full-cov), nis, loglik [, <state>_err, nees]; a summary table on
+stdout, or JSON with --json. --plot DIR draws the run (estimates with +-2 sd,
+measurements and truth; innovations with +-2 sqrt(S); NIS with its chi-square
+bounds; the whitened innovations' autocorrelation) as PNG + SVG with their
+gnuplot scripts and data; 'estlab figures est.csv' draws the same later.
 NIS check: when the mean NIS is more than 2x its upper 95% bound, or less than
 half its lower bound, the summary says so in one line with the usual causes
 (model parameters, Q/R: 'estlab tune', angle conventions: --column).
@@ -58,6 +70,11 @@ Adaptation (--adapt): 'N clip(s)' counts the adapted Q and R matrices (one
 each per update, Q and R apart) whose eigenvalues had to be raised to the
 floor to stay positive definite; with --adapt-what qr it can reach twice the
 number of updates.
+
+Particle filters: the summary gives the effective sample size (ESS). When it
+stays below max(2, 1 % of the particles) for 10 updates in a row the filter
+has collapsed onto one particle: status "degenerate" with hints, exit 1
+(--allow-degenerate: exit 0).
 
 Without --out only the summary is printed. A filter that diverges exits 1
 naming the step and time; est.csv keeps every row computed before.
@@ -132,7 +149,16 @@ void PrintAdaptClips(const FilterSummary& s, const AdaptSpec& adapt) {
             << " updates)\n";
 }
 
-void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& out_path) {
+// The particle filter's effective sample size; nothing for other filters.
+void PrintEss(const FilterSummary& s) {
+  if (s.particles == 0) return;
+  std::cout << "ESS             mean " << s.mean_ess << ", smallest " << s.min_ess << " of "
+            << s.particles << " particles; " << s.collapsed_updates << " of " << s.updates
+            << " updates collapsed (ESS < " << DegeneracyMonitor::Threshold(s.particles) << ")\n";
+}
+
+void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& truth,
+                  const std::string& out_path) {
   std::cout << std::setprecision(5);
   const FilterSummary* f = s.forward.get();  // smoother: the forward filter's
   if (f != nullptr) {
@@ -141,7 +167,7 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
     std::cout << "filter        " << s.filter << "\n";
   }
   std::cout << "steps         " << s.steps << " (" << s.updates << " updates)\nstatus        "
-            << s.status << "\n";
+            << s.status << "\ntruth         " << truth << "\n";
   if (!s.rmse.empty()) {
     std::cout << "\n  state          RMSE          MAE" << (f ? "   filter RMSE" : "") << "\n";
     for (size_t i = 0; i < s.states.size(); ++i) {
@@ -163,6 +189,7 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
     std::cout << "\n";
   }
   if (s.adapt_clips > 0) PrintAdaptClips(s, adapt);
+  PrintEss(f != nullptr ? *f : s);
   std::cout << "wall time       " << s.wall_s << " s (" << s.us_per_step << " us/step)\n";
   if (!out_path.empty()) std::cout << "wrote           " << out_path << "\n";
 }
@@ -171,11 +198,13 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
 
 namespace {
 
-void WriteSummaryJson(const FilterSummary& s, JsonWriter& j) {
+// `extra` adds keys at the end of the top-level object.
+void WriteSummaryJson(const FilterSummary& s, JsonWriter& j,
+                      const std::function<void(JsonWriter&)>& extra = {}) {
   j.BeginObject();
   if (s.forward) {
     j.Key("smoother").Value(s.filter).Key("filter");
-    WriteSummaryJson(*s.forward, j);
+    WriteSummaryJson(*s.forward, j);  // the forward filter's, nested
   } else {
     j.Key("filter").Value(s.filter);
   }
@@ -198,6 +227,13 @@ void WriteSummaryJson(const FilterSummary& s, JsonWriter& j) {
   j.Key("status").Value(s.status);
   if (!s.ok) j.Key("message").Value(s.message);
   j.Key("adapt_clips").Value(s.adapt_clips);
+  if (s.particles > 0) {
+    j.Key("ess").BeginObject().Key("particles").Value(long(s.particles));
+    j.Key("mean").Value(s.mean_ess).Key("min").Value(s.min_ess);
+    j.Key("collapsed_updates").Value(s.collapsed_updates).Key("degenerate").Value(s.degenerate);
+    j.EndObject();
+  }
+  if (extra) extra(j);
   j.EndObject();
 }
 
@@ -214,6 +250,39 @@ std::string FilterSummaryJson(const FilterSummary& s) {
 
 namespace {
 
+// The summary JSON and "truth": the columns used and where that came from
+// (null when none).
+std::string SummaryJsonWithTruth(const FilterSummary& s, const TruthChoice& truth,
+                                 bool has_truth) {
+  JsonWriter j;
+  WriteSummaryJson(s, j, [&](JsonWriter& w) {
+    w.Key("truth");
+    if (!has_truth) {
+      w.Null();
+      return;
+    }
+    w.BeginObject().Key("columns").Value(truth.names).Key("source").Value(truth.source);
+    w.EndObject();
+  });
+  return j.str();
+}
+
+}  // namespace
+
+namespace {
+
+// Draws a run's figures into `dir`, printing where (not with --json) or why
+// not; false when rendering failed.
+bool PlotRun(const RunFigureInput& in, const std::string& dir, bool json) {
+  const FiguresSummary f = DrawRunFigures(in, dir, FiguresOptions{});
+  if (!json)
+    std::cout << "figures         " << f.scripts.size() << " in " << dir
+              << (f.rendered ? " (png via " + f.terminal + ", svg)" : "") << "\n";
+  if (f.message.empty()) return true;
+  std::cerr << "estlab: error: figures: " << f.message << "\n";
+  return false;
+}
+
 // `estlab filter` and `estlab smooth`: the same options and checks; smooth
 // adds --smoother-trajectories and writes the smoothed rows.
 int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
@@ -224,7 +293,11 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
       "out", po::value<std::string>(),
       "per-step output CSV (optional: without it only the summary; never an input file)")(
-      "json", "print a JSON summary");
+      "json", "print a JSON summary")(
+      "plot", po::value<std::string>(),
+      "draw the run into folder DIR: PNG + SVG, their gnuplot scripts and data")(
+      "allow-degenerate", "pf: exit 0 even when the particle filter degenerates");
+  AddTruthOptions(&desc);
   if (smooth)
     desc.add_options()("smoother-trajectories", po::value<int>()->default_value(100),
                        "pf: backward-simulated trajectories of the particle smoother (>= 2)");
@@ -242,6 +315,7 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   if (!vm.count("data")) throw InputError("--data is required");
   if (vm.count("out"))
     RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
+  if (vm.count("plot")) CheckFigureFolder(vm["plot"].as<std::string>());
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   FilterSpec spec = BuildFilterSpec(vm, model);
   if (smooth) {
@@ -256,9 +330,11 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
       CheckCovariance(spec.q, int(model.states.size()),
                       "Q (the particle smoother needs a positive definite process noise)", false);
   }
+  const std::string data_path = vm["data"].as<std::string>();
+  const TruthChoice truth = ResolveTruth(vm, data_path, model);
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const FilterData data =
-      LoadFilterData(vm["data"].as<std::string>(), model, model.FindMeasurement(spec.measurement),
-                     ParseColumnRenames(vm));
+      LoadFilterData(data_path, model, meas, ParseColumnRenames(vm), truth.read);
   CheckPriorTime(spec, data);
   // Open the output first so an unwritable path fails before the work.
   const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";
@@ -270,18 +346,40 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << FilterSummaryJson(result.summary) << "\n";
+    std::cout << SummaryJsonWithTruth(result.summary, truth, data.has_truth) << "\n";
   } else {
-    PrintSummary(result.summary, spec.adapt, out_path);
+    PrintSummary(result.summary, spec.adapt, truth.Describe(data.has_truth), out_path);
   }
-  if (!result.summary.ok) {
-    std::cerr << "estlab: error: " << result.summary.message << "\n";
+  int status = 0;
+  if (vm.count("plot")) {
+    RunFigureInput in;
+    in.title = model.name + ": " + result.summary.filter + " on " +
+               std::filesystem::path(data_path).filename().string();
+    in.columns = result.columns;
+    in.rows = result.rows;
+    for (size_t i = 0; i < model.states.size(); ++i)
+      in.state_units.emplace_back(model.states[i], model.state_units[i]);
+    in.outputs = meas.outputs;
+    in.meas_t = data.t;
+    in.meas_z = data.z;
+    if (!PlotRun(in, vm["plot"].as<std::string>(), vm.count("json") > 0)) status = 1;
+  }
+  const FilterSummary& s = result.summary;
+  if (!s.ok) {
+    std::cerr << "estlab: error: " << s.message << "\n";
     if (out)
       std::cerr << "estlab: the " << result.rows.size() << " rows computed before are in "
                 << out_path << "\n";
     return 1;
   }
-  return 0;
+  if (s.degenerate) {  // a smoother's summary carries its forward filter's
+    if (!vm.count("allow-degenerate")) {
+      std::cerr << "estlab: error: " << s.message << " (--allow-degenerate: exit 0)\n";
+      return 1;
+    }
+    std::cerr << "estlab: warning: " << s.message << "\n";
+  }
+  return status;
 }
 
 }  // namespace

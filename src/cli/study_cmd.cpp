@@ -5,14 +5,17 @@
 #include <atomic>
 #include <boost/program_options.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 
 #include "src/cli/commands.h"
 #include "src/core/parse.h"
 #include "src/core/types.h"
+#include "src/io/csv_reader.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "studies/run_figures.h"
 #include "studies/study_config.h"
 #include "studies/study_figures.h"
 #include "studies/study_results.h"
@@ -227,9 +230,61 @@ int RunMerge(const std::vector<std::string>& args) {
   return 0;
 }
 
+namespace {
+
+// `estlab figures est.csv`: the figures of `estlab filter --plot` from the
+// file it wrote, with the measurements of --data (its z_<output> columns).
+int RunFileFigures(const po::variables_map& vm, const FiguresOptions& options) {
+  const std::string path = vm["dir"].as<std::string>();
+  const CsvTable est = ReadCsv(path);
+  RunFigureInput in;
+  in.title = std::filesystem::path(path).filename().string();
+  in.columns = est.columns;
+  in.rows = est.rows;
+  if (vm.count("data")) {
+    const CsvTable data = ReadCsv(vm["data"].as<std::string>());
+    std::vector<int> zc;
+    for (const auto& c : est.columns)  // the outputs the filter had
+      if (c.rfind("nu_", 0) == 0 && data.ColumnIndex("z_" + c.substr(3)) >= 0) {
+        in.outputs.push_back(c.substr(3));
+        zc.push_back(data.ColumnIndex("z_" + c.substr(3)));
+      }
+    if (in.outputs.empty())  // a smoother's file: every z_ column
+      for (size_t j = 0; j < data.columns.size(); ++j)
+        if (data.columns[j].rfind("z_", 0) == 0) {
+          in.outputs.push_back(data.columns[j].substr(2));
+          zc.push_back(int(j));
+        }
+    const int tc = data.ColumnIndex("t");
+    if (tc < 0) throw InputError(vm["data"].as<std::string>() + ": no 't' (time) column");
+    for (const auto& row : data.rows) {
+      in.meas_t.push_back(row[tc]);
+      for (int c : zc) in.meas_z.push_back(row[c]);
+    }
+  }
+  std::string dir = vm.count("out") ? vm["out"].as<std::string>() : "";
+  if (dir.empty()) dir = std::filesystem::path(path).replace_extension().string() + "_figures";
+  const FiguresSummary f = DrawRunFigures(in, dir, options);
+  std::cout << f.scripts.size() << " figures in " << f.folder;
+  if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";
+  std::cout << "\n";
+  if (!f.message.empty()) {
+    std::cerr << "estlab: error: " << f.message << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
 int RunFigures(const std::vector<std::string>& args) {
-  po::options_description desc("estlab figures DIR: draw a finished study's figures with gnuplot");
-  desc.add_options()("help,h", "this text")("dir", po::value<std::string>(), "results folder")(
+  po::options_description desc(
+      "estlab figures DIR | FILE.csv: draw a finished study's figures, or those of one filter "
+      "run's output file, with gnuplot");
+  desc.add_options()("help,h", "this text")("dir", po::value<std::string>(),
+                                            "results folder, or est.csv of estlab filter/smooth")(
+      "data", po::value<std::string>(), "FILE.csv: the data file, for its measurements")(
+      "out", po::value<std::string>(), "FILE.csv: the figures' folder (default FILE_figures)")(
       "no-render", "write the .dat and .gp files only")(
       "gnuplot", po::value<std::string>()->default_value("gnuplot"), "gnuplot program");
   po::positional_options_description pos;
@@ -239,15 +294,24 @@ int RunFigures(const std::vector<std::string>& args) {
   po::notify(vm);
   if (vm.count("help")) {
     std::cout << desc
-              << "\nWrites DIR/figures/NAME.{dat,gp,png,svg}: estimate vs truth with "
-                 "+-2 sd (a kept run),\nRMSE over time, NEES/NIS with 95 % bounds, mean "
-                 "RMSE per filter with 95 % CI.\n";
+              << "\nA study folder: DIR/figures/NAME.{dat,gp,png,svg}: estimate vs truth with "
+                 "+-2 sd and the\nmeasurements (a kept run), RMSE over time, NEES/NIS with 95 % "
+                 "bounds, mean RMSE per\nfilter with 95 % CI.\n"
+                 "A file: the figures of 'estlab filter --plot' (estimates, innovations, NIS, "
+                 "autocorrelation)\nin FILE_figures/ (or --out DIR).\n\n"
+                 "Examples:\n  estlab figures results/paper002\n"
+                 "  estlab figures est.csv --data d.csv --out est_plots\n";
     return 0;
   }
-  if (!vm.count("dir")) throw InputError("a results folder is required: estlab figures DIR");
+  if (!vm.count("dir"))
+    throw InputError("a results folder or a filter output file is required: estlab figures DIR");
   FiguresOptions options;
   options.render = !vm.count("no-render");
   options.gnuplot = vm["gnuplot"].as<std::string>();
+  if (std::filesystem::is_regular_file(vm["dir"].as<std::string>()))
+    return RunFileFigures(vm, options);
+  if (vm.count("data") || vm.count("out"))
+    throw InputError("--data and --out apply to 'estlab figures FILE.csv', not to a study folder");
   const FiguresSummary f = DrawStudyFigures(vm["dir"].as<std::string>(), options);
   std::cout << f.scripts.size() << " figures in " << f.folder;
   if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";

@@ -1,7 +1,11 @@
 // estlab tune: tune Q and R by maximum innovation likelihood (Ceres), then
 // optionally compare initial, tuned and true noise on a validation file.
+#include <algorithm>
 #include <boost/program_options.hpp>
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -19,7 +23,9 @@
 #include "src/io/output_file.h"
 #include "src/options/estimate_flags.h"
 #include "src/options/filter_flags.h"
+#include "src/options/truth_flags.h"
 #include "src/registry/registry.h"
+#include "studies/run_figures.h"
 
 namespace po = boost::program_options;
 
@@ -276,6 +282,11 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
               << (r.poorly_identified[i] ? "  poorly identified by this data" : "")
               << (r.at_bound[i] ? "  at a bound" : "") << "\n";
   }
+  if (std::find(r.at_bound.begin(), r.at_bound.end(), true) != r.at_bound.end())
+    std::cout << "  at a bound: within 0.1 (log scale) of the search box (initial +- "
+                 "--bound-width, --log-lower/--log-upper, --param-bounds). The data push it "
+                 "further, so the estimate and its SE are the box's: widen the box, or fix the "
+                 "parameter (--q-param/--r-param fixed, or leave it out of --estimate-param)\n";
   PrintPhysical(r);
   std::cout << "\ntuned Q"
             << (r.q_white_accel ? " (qc = " + FormatNumber(r.qc) +
@@ -398,10 +409,78 @@ void PrintProfile(const ProfileResult& p, const std::vector<std::string>& files,
   if (!message.empty()) std::cout << "  " << message << "\n";
 }
 
-// One line per EM iteration, rewritten in place on the terminal.
-void EmProgress(int iteration, double nll, double change) {
-  std::cerr << "\rEM iteration " << iteration << "  NLL " << FormatNumber(nll) << "  change "
-            << FormatNumber(change) << "        " << std::flush;
+// One line per optimiser iteration, rewritten in place on the terminal:
+// "start 2/5  iteration 14  NLL -54082.3  change -0.0213  elapsed 3.1 s".
+std::function<void(const TuneProgress&)> ProgressLine() {
+  const auto t0 = std::chrono::steady_clock::now();
+  return [t0](const TuneProgress& p) {
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::ostringstream line;
+    line << std::setprecision(6);
+    if (p.starts > 0) {
+      line << "start " << p.start << "/" << p.starts;
+    } else {
+      line << p.phase;
+    }
+    line << "  iteration " << p.iteration << "  " << p.objective << " " << p.value << "  change "
+         << std::setprecision(3) << p.change << "  elapsed " << std::fixed << std::setprecision(1)
+         << elapsed << " s";
+    // \r and padding: the line is rewritten in place; \x1b[K clears the rest.
+    std::cerr << "\r" << line.str() << "\x1b[K" << std::flush;
+  };
+}
+
+// Records every start's objective by iteration (for the convergence
+// figure) and prints the progress line on a terminal.
+struct ProgressLog {
+  std::vector<std::vector<double>> by_start;  // [start - 1]; EM and ALS: [0]
+  std::function<void(const TuneProgress&)> line;
+
+  std::function<void(const TuneProgress&)> Callback() {
+    return [this](const TuneProgress& p) {
+      if (std::string(p.phase) != "ml from EM's solution") {
+        const size_t i = p.starts > 0 ? size_t(p.start - 1) : 0;
+        if (by_start.size() <= i) by_start.resize(i + 1);
+        by_start[i].push_back(p.value);
+      }
+      if (line) line(p);
+    };
+  }
+};
+
+// `tune --plot DIR`: the tuned filter run on the first --validate file (else
+// the first --data file), drawn as 'estlab filter --plot' draws it, with the
+// tuner's convergence. False when the figures could not be rendered.
+bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& tuned,
+               const std::vector<double>& history, const std::string& objective) {
+  const std::string path = vm.count("validate")
+                               ? vm["validate"].as<std::vector<std::string>>().front()
+                               : vm["data"].as<std::vector<std::string>>().front();
+  const MeasurementDesc& meas = model.FindMeasurement(tuned.measurement);
+  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm),
+                                         ResolveTruth(vm, path, model).read);
+  const FilterRunOutput run = model.run_filter(tuned, data);
+  RunFigureInput in;
+  in.title = model.name + ": tuned " + run.summary.filter + " on " +
+             std::filesystem::path(path).filename().string();
+  in.columns = run.columns;
+  in.rows = run.rows;
+  for (size_t i = 0; i < model.states.size(); ++i)
+    in.state_units.emplace_back(model.states[i], model.state_units[i]);
+  in.outputs = meas.outputs;
+  in.meas_t = data.t;
+  in.meas_z = data.z;
+  in.objective_history = history;
+  in.objective_name = objective;
+  const std::string dir = vm["plot"].as<std::string>();
+  const FiguresSummary f = DrawRunFigures(in, dir, FiguresOptions{});
+  if (!vm.count("json"))
+    std::cout << "figures: " << f.scripts.size() << " in " << dir << " (the tuned filter on "
+              << path << (f.rendered ? "; png via " + f.terminal + ", svg" : "") << ")\n";
+  if (f.message.empty()) return true;
+  std::cerr << "estlab: error: figures: " << f.message << "\n";
+  return false;
 }
 
 std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
@@ -448,6 +527,9 @@ int RunTune(const std::vector<std::string>& args) {
                                     "als: innovation autocovariance lags 0..N-1 fitted")(
       "tolerance", po::value<std::string>()->default_value("1e-9"),
       "em: stop when the relative NLL change is at most this")(
+      "plot", po::value<std::string>(),
+      "draw the tuned filter on the first --validate (else --data) file into folder DIR, with "
+      "the convergence")(
       "horizon", po::value<std::string>()->default_value("0.5"),
       "s: output-error windows and the validation's free-simulation RMSE")(
       "profile", po::value<std::string>(),
@@ -463,6 +545,7 @@ int RunTune(const std::vector<std::string>& args) {
       "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
       "json", "print a JSON summary");
   AddFilterOptions(&desc, "init-");
+  AddTruthOptions(&desc);
   AddConfigOption(&desc);
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -477,6 +560,7 @@ int RunTune(const std::vector<std::string>& args) {
   if (vm.count("out"))
     RefuseOutputOverInput("--out", vm["out"].as<std::string>(),
                           InputFiles(vm, {"data", "validate", "config"}));
+  if (vm.count("plot")) CheckFigureFolder(vm["plot"].as<std::string>());
   std::optional<ProfileRequest> profile_request;
   std::string profile_prefix;
   if (vm.count("profile")) {
@@ -534,7 +618,6 @@ int RunTune(const std::vector<std::string>& args) {
     if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
     options.form = TunerForm::kEm;
     options.em_tolerance = ParseNumber(vm["tolerance"].as<std::string>(), "--tolerance");
-    if (isatty(STDERR_FILENO)) options.progress = EmProgress;
   } else if (!vm["tolerance"].defaulted()) {
     throw InputError("--tolerance applies to --estimator em");
   }
@@ -548,7 +631,8 @@ int RunTune(const std::vector<std::string>& args) {
   std::vector<FilterData> datasets;
   const auto renames = ParseColumnRenames(vm);
   for (const auto& path : vm["data"].as<std::vector<std::string>>()) {
-    datasets.push_back(LoadFilterData(path, model, meas, renames));
+    datasets.push_back(
+        LoadFilterData(path, model, meas, renames, ResolveTruth(vm, path, model).read));
     CheckPriorTime(spec, datasets.back());
   }
   if (vm.count("validate") && model.run_filter == nullptr)
@@ -596,10 +680,16 @@ int RunTune(const std::vector<std::string>& args) {
       std::cerr << "estlab: error: output-error: " << fit.message << "\n";
       return 1;
     }
+    if (vm.count("plot") && !PlotTuned(vm, model, fit.fitted_spec, {}, "")) return 1;
     return 0;
   }
+  // Progress only on a terminal (stderr; --json keeps stdout clean anyway).
+  ProgressLog log;
+  if (isatty(STDERR_FILENO)) log.line = ProgressLine();
+  options.progress = log.Callback();
   const TuneResult result = model.tune(spec, options, datasets);
-  if (options.progress) std::cerr << "\n";
+  if (log.line) std::cerr << "\n";
+  options.progress = nullptr;  // the profile's re-optimisations stay quiet
   std::optional<ProfileResult> profile;
   std::vector<std::string> profile_files;
   std::string profile_message;
@@ -634,6 +724,22 @@ int RunTune(const std::vector<std::string>& args) {
   if (!result.IsSolutionUsable()) {
     std::cerr << "estlab: error: " << result.message << "\n";
     return 1;
+  }
+  if (vm.count("plot")) {
+    // From the start point (iteration 0): EM's history has it; a Ceres
+    // start reports iterations 1, 2, ... after it (least squares: its cost,
+    // whose start value is not kept).
+    const bool least_squares = options.form == TunerForm::kLeastSquares;
+    std::vector<double> history = result.nll_history;
+    if (history.empty() && result.best_start >= 0 &&
+        size_t(result.best_start) < log.by_start.size()) {
+      if (!least_squares) history = {result.starts[result.best_start].nll_start};
+      const auto& h = log.by_start[result.best_start];
+      history.insert(history.end(), h.begin(), h.end());
+    }
+    if (!PlotTuned(vm, model, result.tuned_spec, history,
+                   least_squares ? "least-squares cost" : "NLL"))
+      return 1;
   }
   return 0;
 }

@@ -130,9 +130,9 @@ std::vector<std::string> WriteProfile(const ProfileResult& p, const std::string&
     if (std::isfinite(p.nll[i]))
       fig.dat() << FormatDouble(p.values[i]) << " " << FormatDouble(p.nll[i] - p.nll_optimum)
                 << "\n";
-  fig.body() << "  set title " << GnuplotQuote("profile likelihood of " + p.name) << "\n"
+  fig.body() << "  set title " << GnuplotText("profile likelihood of " + p.name) << "\n"
              << "  set key inside top center\n  set format x '%.6g'\n  set xtics rotate by -30\n"
-             << "  set xlabel " << GnuplotQuote(p.name) << "\n"
+             << "  set xlabel " << GnuplotText(p.name) << "\n"
              << "  set ylabel 'NLL - NLL(optimum)'\n"
              << "  set arrow from first " << FormatDouble(p.estimate) << ", graph 0 to first "
              << FormatDouble(p.estimate) << ", graph 1 nohead dt 2\n"

@@ -8,6 +8,7 @@
 
 #include "src/core/parse.h"
 #include "src/options/filter_flags.h"
+#include "src/options/truth_flags.h"
 #include "studies/output_error.h"
 
 namespace estlab::cli {
@@ -75,7 +76,8 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   Validation v;
   v.path = path;
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm));
+  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm),
+                                         ResolveTruth(vm, path, model).read);
   CheckPriorTime(spec, data);
   for (size_t j = 0; j < meas.outputs.size(); ++j) {  // as the training files (tuner.h)
     bool any = false;
@@ -87,6 +89,8 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   }
   v.initial = RunOn(model, spec, data, meas.outputs, burn_in, horizon);
   v.tuned = RunOn(model, tuned, data, meas.outputs, burn_in, horizon);
+  v.states = model.states;
+  v.x0 = v.tuned.summary.x0;
 
   // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar
   // (whose parameters are then the true ones too).
@@ -144,8 +148,10 @@ std::vector<Validation> ValidateAll(const po::variables_map& vm, const ModelEntr
 }
 
 void PrintValidation(const Validation& v, const std::vector<std::string>& outputs, double horizon) {
-  std::cout << "\nvalidation on " << v.path
-            << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
+  std::cout << "\nvalidation on " << v.path << "\n  prior mean  ";
+  for (size_t i = 0; i < v.x0.size() && i < v.states.size(); ++i)
+    std::cout << (i ? ", " : "") << v.states[i] << " = " << v.x0[i];
+  std::cout << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
             << outputs.size() << ")   free-sim RMSE over " << horizon << " s   mean NEES   RMSE\n";
   auto row = [&](const char* name, const ValidationRun& r) {
     const NoTruthMetrics& m = r.metrics;
@@ -196,6 +202,9 @@ void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::stri
 void WriteValidationJson(JsonWriter* j, const Validation& v,
                          const std::vector<std::string>& outputs) {
   j->BeginObject().Key("data").Value(v.path);
+  j->Key("x0").BeginObject();
+  for (size_t i = 0; i < v.x0.size() && i < v.states.size(); ++i) j->Key(v.states[i]).Value(v.x0[i]);
+  j->EndObject();
   j->Key("initial");
   WriteRun(j, v.initial, outputs);
   j->Key("tuned");

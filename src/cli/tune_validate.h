@@ -35,6 +35,10 @@ struct ValidationRun {
 
 struct Validation {
   std::string path;
+  // The prior mean of the tuned run on this file (x0 = first-sample: its
+  // own first measurements), by state.
+  std::vector<std::string> states;
+  std::vector<double> x0;
   ValidationRun initial, tuned;
   std::optional<ValidationRun> oracle;
   std::string oracle_source;

@@ -104,6 +104,12 @@ class Filter {
   // sum_i Wc_i (X_i - x)(X-_i - x-)^T). False for filters without one (the
   // particle filter) or before any Predict.
   virtual bool PredictCrossCov(StateCov* /*C*/) const { return false; }
+
+  // For the degeneracy check of the run loop (filter_run_impl.h): the
+  // effective sample size 1 / sum_i w_i^2 of the last Update's weights
+  // (before any resampling) and the number of particles. False for filters
+  // without particles, or before any Update.
+  virtual bool EffectiveSampleSize(double* /*ess*/, int* /*particles*/) const { return false; }
 };
 
 // Wraps the angle components (flags[i] true) of a residual to (-pi, pi], for

@@ -217,6 +217,12 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   // Effective sample size 1 / sum_i w_i^2 after the last Update, and whether
   // it resampled.
   double effective_sample_size() const { return ess_; }
+  bool EffectiveSampleSize(double* ess, int* particles) const override {
+    if (!(ess_ > 0.0)) return false;  // no Update yet
+    *ess = ess_;
+    *particles = int(particles_.cols());
+    return true;
+  }
   bool resampled() const { return resampled_; }
   const Eigen::Matrix<double, kN, Eigen::Dynamic>& particles() const { return particles_; }
   const std::vector<double>& weights() const { return weights_; }

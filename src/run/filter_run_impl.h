@@ -8,6 +8,7 @@
 //   predict from t_{k-1} to t_k (none for the first row unless --t0 < t_0)
 //   update with z_k (skipped when any z_k component is missing)
 //   nis_k = nu^T S^-1 nu,  loglik_k = log N(nu; 0, S)
+//   particle filters: ESS_k, the degeneracy check (degeneracy.h)
 //   with truth: e_k = x_k - x^_k (angles wrapped), nees_k = e^T P^-1 e
 #ifndef ESTLAB_RUN_FILTER_RUN_IMPL_H_
 #define ESTLAB_RUN_FILTER_RUN_IMPL_H_
@@ -24,6 +25,7 @@
 #include "src/core/white_accel.h"
 #include "src/filters/filters.h"
 #include "src/filters/noise_adapter.h"
+#include "src/run/degeneracy.h"
 #include "src/run/filter_spec.h"
 #include "src/run/first_sample.h"
 #include "src/run/smoother_recorder.h"
@@ -67,6 +69,7 @@ struct RowRecord {
   Mat<N, N> P;
   bool have_z = false;
   Vec<double, M> nu;
+  Mat<M, M> S;  // the innovation covariance
   double nis = 0.0, loglik = 0.0;
   size_t step = 0;  // the smoother's step (smoother_recorder.h)
 };
@@ -74,12 +77,14 @@ struct RowRecord {
 // Which columns a run writes (EstimateColumns).
 struct RowLayout {
   bool full_cov = false;
-  bool innovations = true;  // nu_<output>, nis, loglik: the filter's, not a smoother's
+  // nu_<output>, S_<output> [, S_<a>_<b>], nis, loglik: the filter's, not a
+  // smoother's.
+  bool innovations = true;
   bool lag_one = false;     // smooth --full-cov: lag1_<a>_<b> = Cov(a_k, b_{k+1} | all data)
 };
 
 // t, <state>_est, <state>_var [, cov_<a>_<b>] [, lag1_<a>_<b>]
-// [, nu_<output>, nis, loglik] [, <state>_err, nees].
+// [, nu_<output>, S_<output> [, S_<a>_<b>], nis, loglik] [, <state>_err, nees].
 template <class Model, class Meas>
 std::vector<std::string> EstimateColumns(const RowLayout& layout, bool has_truth) {
   constexpr int N = Model::kStateDim;
@@ -97,7 +102,14 @@ std::vector<std::string> EstimateColumns(const RowLayout& layout, bool has_truth
       for (int j = 0; j < N; ++j) cols.push_back(std::string("lag1_") + names[i] + "_" + names[j]);
   }
   if (layout.innovations) {
-    for (const char* o : Meas::kOutputs) cols.push_back(std::string("nu_") + o);
+    const auto& outputs = Meas::kOutputs;
+    for (const char* o : outputs) cols.push_back(std::string("nu_") + o);
+    for (const char* o : outputs) cols.push_back(std::string("S_") + o);
+    if (layout.full_cov) {
+      for (size_t i = 0; i < outputs.size(); ++i)
+        for (size_t j = i + 1; j < outputs.size(); ++j)
+          cols.push_back(std::string("S_") + outputs[i] + "_" + outputs[j]);
+    }
     cols.push_back("nis");
     cols.push_back("loglik");
   }
@@ -139,6 +151,11 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
     }
     if (layout.innovations) {
       for (int j = 0; j < M; ++j) row.push_back(r.have_z ? r.nu(j) : nan);
+      for (int j = 0; j < M; ++j) row.push_back(r.have_z ? r.S(j, j) : nan);
+      if (layout.full_cov) {
+        for (int i = 0; i < M; ++i)
+          for (int j = i + 1; j < M; ++j) row.push_back(r.have_z ? r.S(i, j) : nan);
+      }
       row.push_back(r.have_z ? r.nis : nan);
       row.push_back(r.have_z ? r.loglik : nan);
     }
@@ -178,6 +195,31 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
   }
   s->mean_nees = nees_count ? nees_sum / double(nees_count) : nan;
   ChiSquareBounds95(nees_count, N, s->nees_bounds95);
+}
+
+// The particle filter's ESS figures in *s and, for a degenerate run (and
+// only when nothing failed before), the status "degenerate" with the step,
+// the time and the usual remedies.
+inline void ReportDegeneracy(const DegeneracyMonitor& d, const FilterData& data,
+                             FilterSummary* s) {
+  s->particles = d.particles();
+  s->min_ess = d.min_ess();
+  s->mean_ess = d.mean_ess();
+  s->collapsed_updates = d.collapsed_updates();
+  s->degenerate = d.degenerate();
+  if (!d.degenerate() || !s->ok) return;
+  const size_t k = d.onset_step();
+  s->status = "degenerate";
+  s->message = "particle filter degenerate: the effective sample size stayed below " +
+               FormatNumber(DegeneracyMonitor::Threshold(d.particles())) + " of " +
+               std::to_string(d.particles()) + " particles for " +
+               std::to_string(DegeneracyMonitor::kDegenerateRun) +
+               " updates in a row up to step " + std::to_string(k) + " (t = " +
+               FormatNumber(data.t[k]) + "); " + std::to_string(d.collapsed_updates()) +
+               " updates collapsed, smallest ESS " + FormatNumber(d.min_ess()) +
+               ". Its estimates follow a single particle. Try a larger R (--r-diag; the "
+               "measurement noise is often larger than the sensor's resolution), more particles "
+               "(--particles), or a narrower prior (--p0-diag)";
 }
 
 inline bool IsParticle(const FilterSpec& spec) { return spec.kind() == FilterKind::kPf; }
@@ -247,11 +289,14 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   out.columns = EstimateColumns<Model, Meas>(layout, data.has_truth);
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  filter->Initialize(PriorMean<Model, Meas>(spec, data), MatFromVector<N, N>(spec.p0));
+  const Vec<double, N> x0 = PriorMean<Model, Meas>(spec, data);
+  s.x0.assign(x0.data(), x0.data() + N);
+  filter->Initialize(x0, MatFromVector<N, N>(spec.p0));
   if (smoother) smoother->OnPrior();
   std::vector<RowRecord<N, M>> records;
   records.reserve(data.t.size());
   double nis_sum = 0.0;
+  DegeneracyMonitor degeneracy;
 
   auto fail = [&](size_t k, const std::string& what) {
     s.ok = false;
@@ -279,6 +324,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
     rec.t = data.t[k];
     rec.have_z = z != nullptr;
     rec.nu.setConstant(nan);
+    rec.S.setConstant(nan);
     if (z != nullptr) {
       const StepResult<M> r = filter->Update(*z, R);
       if (r.status != FilterStatus::kOk)
@@ -295,7 +341,11 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
       rec.nu = r.innovation;
+      rec.S = r.innovation_cov;
       rec.nis = r.nis;
+      double ess = 0.0;
+      int particles = 0;
+      if (filter->EffectiveSampleSize(&ess, &particles)) degeneracy.Observe(ess, particles, k);
       rec.loglik = r.log_likelihood;
       if (adapter) {
         adapter->Observe(r, p_pred, filter->cov(), &Q, &R);
@@ -316,6 +366,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
   ChiSquareBounds95(s.updates, M, s.nis_bounds95);
   if (adapter) s.adapt_clips = adapter->clip_count();
+  if (degeneracy.observed()) ReportDegeneracy(degeneracy, data, &s);
   s.final_q.assign(Q.data(), Q.data() + N * N);  // symmetric: storage order irrelevant
   s.final_r.assign(R.data(), R.data() + M * M);
   auto timing = [&](FilterSummary* summary) {

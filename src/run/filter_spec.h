@@ -86,6 +86,17 @@ struct FilterSummary {
   std::string status = "ok";
   std::string message;
   long adapt_clips = 0;  // adaptive: eigenvalue clips applied to keep Q, R SPD
+  std::vector<double> x0;  // the prior mean used (x0 = first-sample: this file's)
+  // Particle filters (degeneracy.h): the particle count, the smallest and
+  // the mean effective sample size over the updates, how many updates
+  // collapsed, and whether the run was degenerate (status "degenerate",
+  // message with the step, time and hints; ok stays true because every
+  // number was computed, but `estlab filter` exits 1 without
+  // --allow-degenerate).
+  int particles = 0;
+  double min_ess = 0.0, mean_ess = 0.0;
+  long collapsed_updates = 0;
+  bool degenerate = false;
   std::vector<double> final_q, final_r;
   // `estlab smooth`: the forward filter's summary (this one's rmse, mae and
   // NEES are the smoother's; its likelihood and NIS are the filter's).

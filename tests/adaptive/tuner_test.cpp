@@ -161,6 +161,42 @@ TEST(TunerLinear, MultiStartIsDeterministicAndKeepsTheBest) {
   EXPECT_EQ(a.nll_tuned, b.nll_tuned);
 }
 
+// The progress callback (what `estlab tune` prints on a terminal) sees every
+// start and iteration: each start's last value is that start's NLL, values
+// never rise within a start (L-BFGS reports accepted steps), and the count
+// of iterations is the start's.
+TEST(TunerLinear, ProgressReportsEveryStartAndIteration) {
+  const double dt = 0.1;
+  const std::vector<FilterData> data = {
+      Simulate<Cv, Cv::Positions>(Integrator::kEuler, Vec<double, 2>(0.0, 1.0), dt, 300,
+                                  WhiteAccel<Cv>(2.0, dt), Mat<1, 1>::Constant(0.25), 8)};
+  TunerOptions options;
+  options.q_param = NoiseParam::kWhiteAccel;
+  options.starts = 3;
+  std::vector<std::vector<double>> by_start(3);
+  options.progress = [&](const TuneProgress& p) {
+    EXPECT_STREQ(p.phase, "start");
+    EXPECT_STREQ(p.objective, "NLL");
+    ASSERT_EQ(p.starts, 3);
+    ASSERT_GE(p.start, 1);
+    ASSERT_LE(p.start, 3);
+    auto& h = by_start[p.start - 1];
+    EXPECT_EQ(p.iteration, int(h.size()) + 1);
+    if (!h.empty()) {
+      EXPECT_NEAR(p.change, p.value - h.back(), 1e-9 * std::abs(p.value));
+      EXPECT_LE(p.value, h.back() + 1e-9 * std::abs(p.value));
+    }
+    h.push_back(p.value);
+  };
+  const TuneResult r = TuneWith<Cv, Cv::Positions>(CvSpec(0.3, 1.5), options, data);
+  ASSERT_EQ(r.starts.size(), 3u);
+  for (size_t s = 0; s < 3; ++s) {
+    ASSERT_FALSE(by_start[s].empty()) << s;
+    EXPECT_EQ(int(by_start[s].size()), r.starts[s].iterations) << s;
+    EXPECT_NEAR(by_start[s].back(), r.starts[s].nll_end, 1e-8 * std::abs(r.starts[s].nll_end));
+  }
+}
+
 // ---------------------------------------------------------------------------
 // 2. Pendulum, y = sin(theta), Euler, white-accel Q.
 
