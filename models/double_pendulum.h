@@ -25,7 +25,8 @@ namespace estlab::models {
 struct DoublePendulum {
   static constexpr const char* kName = "double-pendulum";
   static constexpr const char* kDescription =
-      "double pendulum of point masses (myphysicslab), angles from the downward vertical";
+      "double pendulum of point masses (myphysicslab), both angles absolute from the downward "
+      "vertical";
   static constexpr int kStateDim = 4;
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;

@@ -34,6 +34,9 @@ class Table {
   const RunFigureInput& in_;
 };
 
+// Single-panel figures keep the whole width for the plot (and its title).
+constexpr const char* kKeyBelow = "  set key below\n";
+
 std::string Dat(double v) { return std::isfinite(v) ? FormatDouble(v) : "NaN"; }
 
 std::string XLabel(bool last) { return last ? "  set xlabel 't [s]'\n" : "  unset xlabel\n"; }
@@ -62,7 +65,8 @@ void EstimatesFigure(const RunContext& c) {
   bool truth = true;
   for (const auto& s : c.states) truth = truth && tb.Col(s + "_err") >= 0;
   fig.dat() << "# t";
-  for (const auto& s : c.states) fig.dat() << " " << s << "_est " << s << "_lo2sd " << s << "_hi2sd " << s << "_true";
+  for (const auto& s : c.states)
+    fig.dat() << " " << s << "_est " << s << "_lo2sd " << s << "_hi2sd " << s << "_true";
   fig.dat() << "\n";
   for (size_t k = 0; k < tb.rows(); ++k) {
     fig.dat() << Dat(tb.At(k, tc));
@@ -96,8 +100,9 @@ void EstimatesFigure(const RunContext& c) {
     << "\n";
   for (size_t i = 0; i < n; ++i) {
     const size_t c0 = 2 + 4 * i;  // est, lo, hi, truth
-    b << "  set ylabel " << GnuplotText(StateLabel(c, c.states[i])) << "\n" << XLabel(i + 1 == n)
-      << "  plot " << GnuplotQuote(fig.dat_name()) << " index 0 using 1:" << c0 + 1 << ":" << c0 + 2
+    b << "  set ylabel " << GnuplotText(StateLabel(c, c.states[i])) << "\n"
+      << XLabel(i + 1 == n) << "  plot " << GnuplotQuote(fig.dat_name())
+      << " index 0 using 1:" << c0 + 1 << ":" << c0 + 2
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd'";
     for (size_t j = 0; j < m && have_z; ++j)
       if (c.outputs[j] == c.states[i])
@@ -137,7 +142,8 @@ void InnovationsFigure(const RunContext& c) {
   const Table& tb = c.table;
   GnuplotFigure fig(c.folder, "innovations");
   fig.dat() << "# t";
-  for (const auto& o : c.outputs) fig.dat() << " nu_" << o << " lo2sqrtS_" << o << " hi2sqrtS_" << o;
+  for (const auto& o : c.outputs)
+    fig.dat() << " nu_" << o << " lo2sqrtS_" << o << " hi2sqrtS_" << o;
   fig.dat() << "\n";
   for (size_t k = 0; k < tb.rows(); ++k) {
     fig.dat() << Dat(tb.At(k, tb.Col("t")));
@@ -154,8 +160,9 @@ void InnovationsFigure(const RunContext& c) {
     << GnuplotText(c.in.title + ": innovations with +-2 sqrt(S)") << "\n";
   for (size_t j = 0; j < m; ++j) {
     const size_t c0 = 2 + 3 * j;
-    b << "  set ylabel " << GnuplotText("nu " + c.outputs[j]) << "\n" << XLabel(j + 1 == m)
-      << "  plot " << GnuplotQuote(fig.dat_name()) << " using 1:" << c0 + 1 << ":" << c0 + 2
+    b << "  set ylabel " << GnuplotText("nu " + c.outputs[j]) << "\n"
+      << XLabel(j + 1 == m) << "  plot " << GnuplotQuote(fig.dat_name()) << " using 1:" << c0 + 1
+      << ":" << c0 + 2
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#fdd0a2' title '+-2 sqrt(S)', "
          "\\\n       '' using 1:"
       << c0 << " with points pt 7 ps 0.35 lc rgb '#d62728' title 'innovation'\n";
@@ -189,7 +196,7 @@ void NisFigure(const RunContext& c) {
                    " (95 % bounds of the mean " + FormatNumber(mean[0]) + " .. " +
                    FormatNumber(mean[1]) + ")")
     << "\n"
-    << GnuplotLogAxis("y") << "  set ylabel 'NIS'\n  set xlabel 't [s]'\n"
+    << GnuplotLogAxis("y") << kKeyBelow << "  set ylabel 'NIS'\n  set xlabel 't [s]'\n"
     << "  plot " << GnuplotQuote(fig.dat_name())
     << " using 1:2 with points pt 7 ps 0.35 lc rgb '#1f77b4' title 'NIS', \\\n       "
     << FormatDouble(step[0]) << " with lines dt 2 lc rgb 'gray30' title "
@@ -229,7 +236,8 @@ void AutocorrelationFigure(const RunContext& c) {
   b << "  set title "
     << GnuplotText(c.in.title + ": autocorrelation of the whitened innovations nu/sqrt(S), " +
                    std::to_string(updates) + " updates")
-    << "\n  set xlabel 'lag [updates]'\n  set ylabel 'autocorrelation'\n  plot ";
+    << "\n"
+    << kKeyBelow << "  set xlabel 'lag [updates]'\n  set ylabel 'autocorrelation'\n  plot ";
   for (size_t j = 0; j < rho.size(); ++j)
     b << (j ? ", \\\n       " : "") << GnuplotQuote(fig.dat_name()) << " index " << j
       << " using 1:2 with impulses lw 2 lc rgb '" << (j % 2 ? "#d62728" : "#1f77b4") << "' title "
@@ -246,10 +254,10 @@ void ConvergenceFigure(const RunContext& c) {
   for (size_t i = 0; i < c.in.objective_history.size(); ++i)
     fig.dat() << i << " " << Dat(c.in.objective_history[i]) << "\n";
   auto& b = fig.body();
-  b << "  set title " << GnuplotText(c.in.title + ": the tuner's " + c.in.objective_name +
-                                     " by iteration")
-    << "\n  set xlabel 'iteration (0: the start point)'\n  set ylabel " << GnuplotText(c.in.objective_name)
-    << "\n  plot " << GnuplotQuote(fig.dat_name())
+  b << "  set title "
+    << GnuplotText(c.in.title + ": the tuner's " + c.in.objective_name + " by iteration") << "\n"
+    << kKeyBelow << "  set xlabel 'iteration (0: the start point)'\n  set ylabel "
+    << GnuplotText(c.in.objective_name) << "\n  plot " << GnuplotQuote(fig.dat_name())
     << " using 1:2 with linespoints pt 7 ps 0.6 lc rgb '#1f77b4' title "
     << GnuplotText(c.in.objective_name) << "\n";
   c.scripts->push_back(fig.Write(c.term, 900, 420));

@@ -579,6 +579,12 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
     if (state.config_hash != ConfigHash(config.text))
       throw InputError("'" + dir + "' holds results of a different configuration (" + dir +
                        "/config.ini); use another --out or delete it");
+    if (runs < state.runs && !options.force)
+      throw InputError("'" + dir + "' holds " + std::to_string(state.runs) +
+                       " runs per scenario; --runs " + std::to_string(runs) + " would drop runs " +
+                       std::to_string(runs) + ".." + std::to_string(state.runs - 1) +
+                       " from its results. Use another --out, or --force to keep only the first " +
+                       std::to_string(runs));
     if (state.shard != options.shard || state.shards != options.shards)
       throw InputError("'" + dir + "' holds shard " + std::to_string(state.shard) + "/" +
                        std::to_string(state.shards) + ", not " + std::to_string(options.shard) +

@@ -39,6 +39,9 @@ struct StudyRunOptions {
   int jobs = 0;  // 0 = the config's jobs
   int shard = 1, shards = 1;
   bool progress = true;  // progress on stderr
+  // Resuming a folder with fewer runs than it holds drops the runs beyond
+  // the new count from its results: refused unless force.
+  bool force = false;
   // When non-null and nonzero: take no new runs, finish and write the
   // running ones, return with interrupted = true.
   const std::atomic<int>* stop = nullptr;

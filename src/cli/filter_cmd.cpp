@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "src/cli/commands.h"
+#include "src/cli/plot_run.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/options/filter_flags.h"
@@ -252,8 +253,7 @@ namespace {
 
 // The summary JSON and "truth": the columns used and where that came from
 // (null when none).
-std::string SummaryJsonWithTruth(const FilterSummary& s, const TruthChoice& truth,
-                                 bool has_truth) {
+std::string SummaryJsonWithTruth(const FilterSummary& s, const TruthChoice& truth, bool has_truth) {
   JsonWriter j;
   WriteSummaryJson(s, j, [&](JsonWriter& w) {
     w.Key("truth");
@@ -270,18 +270,6 @@ std::string SummaryJsonWithTruth(const FilterSummary& s, const TruthChoice& trut
 }  // namespace
 
 namespace {
-
-// Draws a run's figures into `dir`, printing where (not with --json) or why
-// not; false when rendering failed.
-bool PlotRun(const RunFigureInput& in, const std::string& dir, bool json) {
-  const FiguresSummary f = DrawRunFigures(in, dir, FiguresOptions{});
-  if (!json)
-    std::cout << "figures         " << f.scripts.size() << " in " << dir
-              << (f.rendered ? " (png via " + f.terminal + ", svg)" : "") << "\n";
-  if (f.message.empty()) return true;
-  std::cerr << "estlab: error: figures: " << f.message << "\n";
-  return false;
-}
 
 // `estlab filter` and `estlab smooth`: the same options and checks; smooth
 // adds --smoother-trajectories and writes the smoothed rows.
@@ -352,17 +340,11 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   }
   int status = 0;
   if (vm.count("plot")) {
-    RunFigureInput in;
-    in.title = model.name + ": " + result.summary.filter + " on " +
-               std::filesystem::path(data_path).filename().string();
-    in.columns = result.columns;
-    in.rows = result.rows;
-    for (size_t i = 0; i < model.states.size(); ++i)
-      in.state_units.emplace_back(model.states[i], model.state_units[i]);
-    in.outputs = meas.outputs;
-    in.meas_t = data.t;
-    in.meas_z = data.z;
-    if (!PlotRun(in, vm["plot"].as<std::string>(), vm.count("json") > 0)) status = 1;
+    const PlotRequest plot{.dir = vm["plot"].as<std::string>(),
+                           .what = result.summary.filter + " on " +
+                                   std::filesystem::path(data_path).filename().string(),
+                           .json = vm.count("json") > 0};
+    if (!PlotRun(model, meas, data, result, plot)) status = 1;
   }
   const FilterSummary& s = result.summary;
   if (!s.ok) {

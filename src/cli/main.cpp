@@ -1,6 +1,7 @@
 // estlab: nonlinear state estimation from one command line.
 #include <boost/program_options/errors.hpp>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -10,6 +11,7 @@
 #include "estlab_version.h"
 #include "src/cli/commands.h"
 #include "src/core/types.h"
+#include "src/io/temp_files.h"
 #include "src/registry/model_plugin.h"
 
 namespace {
@@ -59,6 +61,7 @@ void PrintUsage(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  estlab::InstallTempFileCleanup();  // a Ctrl-C leaves no .estlab-*.tmp behind
   std::vector<std::string> args(argv + 1, argv + argc);
   // --model-cache DIR (anywhere): where model files' libraries are cached.
   for (size_t i = 0; i < args.size(); ++i) {
@@ -90,6 +93,13 @@ int main(int argc, char** argv) {
       return 2;
     } catch (const boost::program_options::error& e) {
       std::cerr << "estlab: error: " << e.what() << " (see 'estlab " << name << " --help')\n";
+      return 2;
+    } catch (const std::filesystem::filesystem_error& e) {
+      // A folder or file that cannot be made or written (read-only, full,
+      // a path through a file) is the environment's, as bad input is: the
+      // user changes something and runs again. Exit 1 stays for numerical
+      // failures, whose rows so far are kept.
+      std::cerr << "estlab: error: " << e.what() << "\n";
       return 2;
     } catch (const std::exception& e) {
       std::cerr << "estlab: error: " << e.what() << "\n";

@@ -242,6 +242,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   WriteCsv(csv.stream(), result.columns, result.rows);
   sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
                                   method_name);
+  csv.Finish();  // both written before either is in place: both or neither
+  sidecar.Finish();
   csv.Commit();
   sidecar.Commit();
 

@@ -47,7 +47,9 @@ summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
 report.md, manifest.json. runs.csv and summary.csv do not depend on --jobs or
 --shard. Ctrl-C (or SIGTERM) stops taking new runs, writes the finished ones
 and exits 130 (143); the same command again resumes.
-Exit status: 0 done, 1 runs failed to write, 2 bad config or options.
+Exit status: 0 done (filter runs that failed numerically are results: their
+status is in runs.csv), 2 bad config or options, or an output that cannot be
+written (a read-only or full folder), 130/143 interrupted (resumable).
 )";
 
 std::atomic<int> g_stop_signal{0};
@@ -165,7 +167,8 @@ int RunStudyCommand(const std::vector<std::string>& args) {
       "Monte Carlo runs per scenario (overrides [study] runs; not for recorded data)")(
       "jobs", po::value<int>(), "worker threads (overrides [study] jobs)")(
       "shard", po::value<std::string>(), "k/N: only runs i with i % N == k-1")(
-      "quiet", "no progress output")("json", "print a JSON summary on stdout");
+      "quiet", "no progress output")("json", "print a JSON summary on stdout")(
+      "force", "resume with fewer --runs than the folder holds (the others are dropped)");
   po::positional_options_description pos;
   pos.add("config", 1);
   po::variables_map vm;
@@ -190,6 +193,7 @@ int RunStudyCommand(const std::vector<std::string>& args) {
   }
   if (vm.count("shard")) ParseShard(vm["shard"].as<std::string>(), &options.shard, &options.shards);
   options.progress = !vm.count("quiet");
+  options.force = vm.count("force") > 0;
   const bool json = vm.count("json") > 0;
 
   const StudyConfig config = LoadStudyConfig(vm["config"].as<std::string>());
@@ -232,6 +236,17 @@ int RunMerge(const std::vector<std::string>& args) {
 
 namespace {
 
+// "N figures in FOLDER (png via T, svg)"; exit status 1 with the reason when
+// they could not be rendered (the scripts and data are written).
+int ReportFigures(const FiguresSummary& f) {
+  std::cout << f.scripts.size() << " figures in " << f.folder;
+  if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";
+  std::cout << "\n";
+  if (f.message.empty()) return 0;
+  std::cerr << "estlab: error: " << f.message << "\n";
+  return 1;
+}
+
 // `estlab figures est.csv`: the figures of `estlab filter --plot` from the
 // file it wrote, with the measurements of --data (its z_<output> columns).
 int RunFileFigures(const po::variables_map& vm, const FiguresOptions& options) {
@@ -265,14 +280,7 @@ int RunFileFigures(const po::variables_map& vm, const FiguresOptions& options) {
   std::string dir = vm.count("out") ? vm["out"].as<std::string>() : "";
   if (dir.empty()) dir = std::filesystem::path(path).replace_extension().string() + "_figures";
   const FiguresSummary f = DrawRunFigures(in, dir, options);
-  std::cout << f.scripts.size() << " figures in " << f.folder;
-  if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";
-  std::cout << "\n";
-  if (!f.message.empty()) {
-    std::cerr << "estlab: error: " << f.message << "\n";
-    return 1;
-  }
-  return 0;
+  return ReportFigures(f);
 }
 
 }  // namespace
@@ -313,14 +321,7 @@ int RunFigures(const std::vector<std::string>& args) {
   if (vm.count("data") || vm.count("out"))
     throw InputError("--data and --out apply to 'estlab figures FILE.csv', not to a study folder");
   const FiguresSummary f = DrawStudyFigures(vm["dir"].as<std::string>(), options);
-  std::cout << f.scripts.size() << " figures in " << f.folder;
-  if (f.rendered) std::cout << " (png via " << f.terminal << ", svg)";
-  std::cout << "\n";
-  if (!f.message.empty()) {
-    std::cerr << "estlab: error: " << f.message << "\n";
-    return 1;
-  }
-  return 0;
+  return ReportFigures(f);
 }
 
 }  // namespace estlab::cli

@@ -5,8 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "src/cli/commands.h"
+#include "src/cli/plot_run.h"
 #include "src/cli/tune_output_error.h"
 #include "src/cli/tune_profile.h"
 #include "src/cli/tune_validate.h"
@@ -136,8 +137,19 @@ step, the mean NIS with its 95 % bounds and the one-step-ahead prediction
 RMSE of every output (after --burn-in), and RMSE and NEES against truth
 columns when the file has them. --x0 first-sample gives every --data and
 --validate file its own prior mean: its first measured value of each state
-an output of the same name measures (the others 0). Exit status 1, and no
---out file, when the filter diverges at every start.
+an output of the same name measures (the others 0); the validation report
+gives each file's prior. Truth columns are read as 'estlab filter' reads them
+(the file's .json from 'estlab simulate', or --truth; --no-truth). A
+parameter 'at a bound' ended within 0.1 (log scale) of its search box: the
+data push it further, so its estimate and SE are the box's. Exit status 1,
+and no --out file, when the filter diverges at every start.
+
+Progress: on a terminal, stderr shows one line per optimiser iteration
+(start k/N, iteration, NLL or least-squares cost, its change, elapsed time);
+piped or redirected it is silent, and stdout holds only the report (--json:
+only the JSON). --plot DIR draws the tuned filter on the first --validate
+file (else the first --data file) as 'estlab filter --plot' does, plus the
+tuner's objective by iteration (convergence).
 )";
 
 // --init-q-scalar s -> init-q-diag "s,s,..." in the settings (the user's own
@@ -458,29 +470,16 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
                                ? vm["validate"].as<std::vector<std::string>>().front()
                                : vm["data"].as<std::vector<std::string>>().front();
   const MeasurementDesc& meas = model.FindMeasurement(tuned.measurement);
-  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm),
-                                         ResolveTruth(vm, path, model).read);
+  const FilterData data =
+      LoadFilterData(path, model, meas, ParseColumnRenames(vm), ResolveTruth(vm, path, model).read);
   const FilterRunOutput run = model.run_filter(tuned, data);
-  RunFigureInput in;
-  in.title = model.name + ": tuned " + run.summary.filter + " on " +
-             std::filesystem::path(path).filename().string();
-  in.columns = run.columns;
-  in.rows = run.rows;
-  for (size_t i = 0; i < model.states.size(); ++i)
-    in.state_units.emplace_back(model.states[i], model.state_units[i]);
-  in.outputs = meas.outputs;
-  in.meas_t = data.t;
-  in.meas_z = data.z;
-  in.objective_history = history;
-  in.objective_name = objective;
-  const std::string dir = vm["plot"].as<std::string>();
-  const FiguresSummary f = DrawRunFigures(in, dir, FiguresOptions{});
-  if (!vm.count("json"))
-    std::cout << "figures: " << f.scripts.size() << " in " << dir << " (the tuned filter on "
-              << path << (f.rendered ? "; png via " + f.terminal + ", svg" : "") << ")\n";
-  if (f.message.empty()) return true;
-  std::cerr << "estlab: error: figures: " << f.message << "\n";
-  return false;
+  const PlotRequest plot{.dir = vm["plot"].as<std::string>(),
+                         .what = "tuned " + run.summary.filter + " on " +
+                                 std::filesystem::path(path).filename().string(),
+                         .history = history,
+                         .objective = objective,
+                         .json = vm.count("json") > 0};
+  return PlotRun(model, meas, data, run, plot);
 }
 
 std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
@@ -529,9 +528,8 @@ int RunTune(const std::vector<std::string>& args) {
       "em: stop when the relative NLL change is at most this")(
       "plot", po::value<std::string>(),
       "draw the tuned filter on the first --validate (else --data) file into folder DIR, with "
-      "the convergence")(
-      "horizon", po::value<std::string>()->default_value("0.5"),
-      "s: output-error windows and the validation's free-simulation RMSE")(
+      "the convergence")("horizon", po::value<std::string>()->default_value("0.5"),
+                         "s: output-error windows and the validation's free-simulation RMSE")(
       "profile", po::value<std::string>(),
       "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21)")(
       "profile-out", po::value<std::string>(),
@@ -631,8 +629,10 @@ int RunTune(const std::vector<std::string>& args) {
   std::vector<FilterData> datasets;
   const auto renames = ParseColumnRenames(vm);
   for (const auto& path : vm["data"].as<std::vector<std::string>>()) {
-    datasets.push_back(
-        LoadFilterData(path, model, meas, renames, ResolveTruth(vm, path, model).read));
+    // Output-error starts its free simulations from the recorded states:
+    // there the state columns are the method's input, not truth to score.
+    const bool states = estimator == "output-error" || ResolveTruth(vm, path, model).read;
+    datasets.push_back(LoadFilterData(path, model, meas, renames, states));
     CheckPriorTime(spec, datasets.back());
   }
   if (vm.count("validate") && model.run_filter == nullptr)

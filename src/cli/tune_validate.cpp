@@ -59,14 +59,18 @@ std::vector<double> SidecarParams(const std::string& text, const ModelEntry& mod
   return out;
 }
 
+// `data` is scored against its truth when it has one; the free simulation
+// starts from the recorded states of `recorded` (its state columns, truth
+// or not).
 ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const FilterData& data,
-                    const std::vector<std::string>& outputs, int burn_in, double horizon) {
+                    const FilterData& recorded, const std::vector<std::string>& outputs,
+                    int burn_in, double horizon) {
   const FilterRunOutput out = model.run_filter(spec, data);
   // The burn-in counts updates, as the tuner's; rows without an update are
   // few in recorded data, so skip that many rows.
   ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}};
-  if (data.has_truth && !model.has_input)
-    r.free_rmse = FreeSimulationRmse(model, spec, data, horizon);
+  if (recorded.has_truth && !model.has_input)
+    r.free_rmse = FreeSimulationRmse(model, spec, recorded, horizon);
   return r;
 }
 
@@ -76,8 +80,14 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   Validation v;
   v.path = path;
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const FilterData data = LoadFilterData(path, model, meas, ParseColumnRenames(vm),
-                                         ResolveTruth(vm, path, model).read);
+  // The state columns when the file has them (the free simulation's start
+  // points); scored as truth only when the file or --truth says so.
+  const FilterData recorded = LoadFilterData(path, model, meas, ParseColumnRenames(vm), true);
+  FilterData data = recorded;
+  if (!ResolveTruth(vm, path, model).read) {
+    data.has_truth = false;
+    data.truth.clear();
+  }
   CheckPriorTime(spec, data);
   for (size_t j = 0; j < meas.outputs.size(); ++j) {  // as the training files (tuner.h)
     bool any = false;
@@ -87,8 +97,8 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
       throw InputError(path + ": measurement column z_" + meas.outputs[j] +
                        " has no value (all missing)");
   }
-  v.initial = RunOn(model, spec, data, meas.outputs, burn_in, horizon);
-  v.tuned = RunOn(model, tuned, data, meas.outputs, burn_in, horizon);
+  v.initial = RunOn(model, spec, data, recorded, meas.outputs, burn_in, horizon);
+  v.tuned = RunOn(model, tuned, data, recorded, meas.outputs, burn_in, horizon);
   v.states = model.states;
   v.x0 = v.tuned.summary.x0;
 
@@ -127,7 +137,7 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
     for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
     oracle.r.assign(m * m, 0.0);
     for (int i = 0; i < m; ++i) oracle.r[i * m + i] = r_diag[i];
-    v.oracle = RunOn(model, oracle, data, meas.outputs, burn_in, horizon);
+    v.oracle = RunOn(model, oracle, data, recorded, meas.outputs, burn_in, horizon);
     v.oracle_source = source;
   }
   return v;
@@ -203,7 +213,8 @@ void WriteValidationJson(JsonWriter* j, const Validation& v,
                          const std::vector<std::string>& outputs) {
   j->BeginObject().Key("data").Value(v.path);
   j->Key("x0").BeginObject();
-  for (size_t i = 0; i < v.x0.size() && i < v.states.size(); ++i) j->Key(v.states[i]).Value(v.x0[i]);
+  for (size_t i = 0; i < v.x0.size() && i < v.states.size(); ++i)
+    j->Key(v.states[i]).Value(v.x0[i]);
   j->EndObject();
   j->Key("initial");
   WriteRun(j, v.initial, outputs);

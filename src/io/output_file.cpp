@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "src/core/types.h"
+#include "src/io/temp_files.h"
 
 namespace estlab {
 
@@ -44,9 +45,16 @@ OutputFile::OutputFile(const std::string& path) : path_(path) {
   const fs::file_status st = fs::status(target_, ec);
   if (fs::is_directory(st)) throw InputError("output path '" + path + "' is a directory");
   const bool direct = fs::exists(st) && !fs::is_regular_file(st);
-  if (!direct) tmp_path_ = TempPathBeside(target_);
+  if (!direct) {
+    tmp_path_ = TempPathBeside(target_);
+    RemoveStaleTempFiles(fs::path(target_).parent_path().string());
+    RegisterTempFile(tmp_path_);
+  }
   stream_.open(direct ? target_ : tmp_path_, std::ios::out | std::ios::trunc);
-  if (!stream_) throw InputError("cannot write output file '" + path + "'");
+  if (!stream_) {
+    if (!tmp_path_.empty()) UnregisterTempFile(tmp_path_);
+    throw InputError("cannot write output file '" + path + "'");
+  }
 }
 
 OutputFile::~OutputFile() {
@@ -54,19 +62,29 @@ OutputFile::~OutputFile() {
     stream_.close();
     if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
   }
+  if (!tmp_path_.empty()) UnregisterTempFile(tmp_path_);
 }
 
-void OutputFile::Commit() {
+void OutputFile::Finish() {
+  if (finished_) return;
+  finished_ = true;
   stream_.flush();
   const bool ok = static_cast<bool>(stream_);
   stream_.close();
-  committed_ = true;
   if (!ok) {
+    committed_ = true;  // nothing left for the destructor
     if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
     throw InputError("error while writing '" + path_ + "'");
   }
+}
+
+void OutputFile::Commit() {
+  Finish();
+  committed_ = true;
   if (tmp_path_.empty()) return;
-  if (std::rename(tmp_path_.c_str(), target_.c_str()) != 0) {
+  const int renamed = std::rename(tmp_path_.c_str(), target_.c_str());
+  UnregisterTempFile(tmp_path_);
+  if (renamed != 0) {
     std::remove(tmp_path_.c_str());
     throw InputError("cannot move output into place at '" + path_ + "'");
   }

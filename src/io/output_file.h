@@ -1,15 +1,17 @@
 // Files that appear whole or not at all: text goes to a short temporary name
 // ".estlab-<pid>-<n>.tmp" in the target's folder and is renamed onto it by
-// Commit(). A file never committed is removed, so a failed command leaves no
-// partial output under the requested name. A symlink is resolved first (the
-// link stays, its target is replaced); anything that exists and is not a
-// regular file (/dev/null, a FIFO, a device) is written directly, never
-// replaced by a regular file.
+// Commit(); a SIGINT/SIGTERM removes it, and a later process writing in the
+// folder removes those of dead processes (temp_files.h). A file never committed is removed, so a
+// failed command leaves no partial output under the requested name. A symlink is resolved first
+// (the link stays, its target is replaced); anything that exists and is not a regular file
+// (/dev/null, a FIFO, a device) is written directly, never replaced by a regular file.
 //
 // Usage:
 //   OutputFile out("traj.csv");          // throws InputError if unwritable
 //   out.stream() << "t,theta\n";
 //   out.Commit();
+// Two outputs that belong together (a CSV and its sidecar) appear both or
+// neither: Finish() both (where a full disk shows), then Commit() both.
 #ifndef ESTLAB_IO_OUTPUT_FILE_H_
 #define ESTLAB_IO_OUTPUT_FILE_H_
 
@@ -27,7 +29,10 @@ class OutputFile {
   OutputFile& operator=(const OutputFile&) = delete;
 
   std::ostream& stream() { return stream_; }
-  // Flushes, checks for write errors, renames into place. Throws InputError.
+  // Flushes, closes and checks for write errors (the temporary file is
+  // removed and InputError thrown on one); the output is not in place yet.
+  void Finish();
+  // Finish() unless done, then renames into place. Throws InputError.
   void Commit();
   const std::string& path() const { return path_; }
 
@@ -36,6 +41,7 @@ class OutputFile {
   std::string target_;    // path_ with symlinks resolved
   std::string tmp_path_;  // empty when writing directly to target_
   std::ofstream stream_;
+  bool finished_ = false;
   bool committed_ = false;
 };
 

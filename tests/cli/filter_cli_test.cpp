@@ -27,8 +27,8 @@ TEST(FilterCli, RoundTripWithoutColumnMappingReportsRmse) {
     const auto lines = SplitLines(ReadFile(dir.File("est.csv")));
     ASSERT_EQ(lines.size(), 402u) << f;
     EXPECT_EQ(lines[0],
-              "t,theta_est,omega_est,theta_var,omega_var,nu_sin_theta,nis,loglik,theta_err,"
-              "omega_err,nees");
+              "t,theta_est,omega_est,theta_var,omega_var,nu_sin_theta,S_sin_theta,nis,loglik,"
+              "theta_err,omega_err,nees");
   }
   // The human summary names RMSE per state.
   const RunResult r =

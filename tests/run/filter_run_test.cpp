@@ -3,6 +3,7 @@
 // in the measurement noise.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -82,7 +83,7 @@ TEST(FilterRun, UkfNisConsistentOverMonteCarloRuns) {
     spec.p0 = {1e-12, 0, 0, 1e-12};  // the truth starts exactly at x0
     const FilterRunOutput out = model.run_filter(spec, d);
     ASSERT_TRUE(out.summary.ok) << out.summary.message;
-    const int nis_col = 7;  // t, 2 est, 2 var, nu, nis
+    const int nis_col = 8;  // t, 2 est, 2 var, nu, S, nis (1-based)
     ASSERT_EQ(out.columns[nis_col - 1], "nis");
     for (int k = 0; k <= steps; ++k) {
       nis_sum[k] += out.rows[k][nis_col - 1];
@@ -123,7 +124,10 @@ FilterData StepNoiseData(uint64_t seed, int half) {
 }
 
 double MeanNis(const FilterRunOutput& out, int from, int to) {
-  const int col = out.columns.size() > 7 && out.columns[6] == "nis" ? 6 : -1;
+  const auto it = std::find(out.columns.begin(), out.columns.end(), "nis");
+  EXPECT_NE(it, out.columns.end());
+  if (it == out.columns.end()) return std::nan("");
+  const size_t col = size_t(it - out.columns.begin());
   double s = 0;
   for (int k = from; k < to; ++k) s += out.rows[k][col];
   return s / (to - from);

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <fcntl.h>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -61,6 +62,24 @@ TEST_F(StudyCli, JobsDoNotChangeTheResults) {
   EXPECT_NE(report.find("**PF beats EKF**"), std::string::npos);
   EXPECT_NE(ReadFile(dir_.File("j1/manifest.json")).find("\"sundials_version\""),
             std::string::npos);
+}
+
+// Issue 15 item 7: resuming a complete folder with fewer --runs used to cut
+// runs.csv down silently; it is refused (exit 2, the folder untouched)
+// unless --force.
+TEST_F(StudyCli, ShrinkingRunsOnAFolderIsRefusedUnlessForced) {
+  WriteText(dir_.File("s.ini"), TinyStudy(4));
+  ASSERT_EQ(RunEstlab("study s.ini --out r --quiet", dir_.path()).exit_code, 0);
+  const std::string before = RunsCsv(dir_, "r");
+  const auto shrink = RunEstlab("study s.ini --out r --quiet --runs 2", dir_.path());
+  EXPECT_EQ(shrink.exit_code, 2) << shrink.err;
+  EXPECT_NE(shrink.err.find("'r' holds 4 runs per scenario; --runs 2 would drop runs 2..3"),
+            std::string::npos)
+      << shrink.err;
+  EXPECT_EQ(RunsCsv(dir_, "r"), before);
+  const auto forced = RunEstlab("study s.ini --out r --quiet --runs 2 --force", dir_.path());
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_LT(RunsCsv(dir_, "r").size(), before.size());
 }
 
 TEST_F(StudyCli, ThreeShardsMergedEqualOneRun) {
@@ -184,6 +203,40 @@ TEST_F(StudyCli, FiguresWriteScriptsDataAndImages) {
       EXPECT_TRUE(dir_.Exists(path)) << path;
       if (dir_.Exists(path)) {
         EXPECT_GT(std::filesystem::file_size(dir_.File(path)), 100u) << path;
+      }
+    }
+  }
+  // Issue 14 item 7: log axes read as powers of ten, names stay as written,
+  // each filter x noise line has its own dash and marker, and the estimate
+  // figure shows the measurements.
+  const std::string cons = ReadFile(dir_.File("r/figures/pend_nees_nis.gp"));
+  EXPECT_NE(cons.find("set format y '10^{%L}'"), std::string::npos) << cons;
+  EXPECT_NE(cons.find("set key outside right top noenhanced"), std::string::npos);
+  EXPECT_NE(cons.find(" dt 1 pt 1 "), std::string::npos) << cons;
+  EXPECT_NE(cons.find(" dt 2 pt 2 "), std::string::npos) << cons;
+  const std::string est = ReadFile(dir_.File("r/figures/pend_estimate_run0_ekf_oracle.gp"));
+  EXPECT_NE(est.find("title 'measurement'"), std::string::npos) << est;
+  EXPECT_NE(ReadFile(dir_.File("r/figures/pend_estimate_run0_ekf_oracle.dat")).find(" z_"),
+            std::string::npos);
+  // No two neighbouring tick labels of a rendered figure read the same
+  // (the old '%f'-like labels printed 0.000019 0.000019 0.000020).
+  for (const char* name : {"pend_rmse_time", "pend_nees_nis", "pend_rmse_means"}) {
+    const std::string svg = ReadFile(dir_.File(std::string("r/figures/") + name + ".svg"));
+    std::vector<std::string> labels;
+    for (size_t at = svg.find("<text"); at != std::string::npos; at = svg.find("<text", at + 1)) {
+      const size_t end = svg.find("</text>", at);
+      std::string text;
+      bool in_tag = false;
+      for (size_t i = svg.find('>', at) + 1; i < end; ++i) {
+        if (svg[i] == '<') in_tag = true;
+        if (!in_tag) text += svg[i];
+        if (svg[i] == '>') in_tag = false;
+      }
+      labels.push_back(text);
+    }
+    for (size_t i = 1; i < labels.size(); ++i) {
+      if (!labels[i].empty() && std::isdigit(static_cast<unsigned char>(labels[i].back()))) {
+        EXPECT_NE(labels[i], labels[i - 1]) << name << ": label " << i;
       }
     }
   }
