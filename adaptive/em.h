@@ -327,8 +327,8 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     result.nll_history.push_back(nll_next);
     result.iteration_wall_s.push_back(std::chrono::duration<double>(Clock::now() - t_it).count());
     if (options.progress)
-      options.progress({.phase = "em", .iteration = start.iterations, .value = nll_next,
-                        .change = change});
+      options.progress(
+          {.phase = "em", .iteration = start.iterations, .value = nll_next, .change = change});
     theta = next;
     nll = nll_next;
     if (nll < best_nll) best = theta, best_nll = nll;

@@ -83,9 +83,9 @@ struct EstimatedParam {
 
 // What TunerOptions::progress reports after each iteration.
 struct TuneProgress {
-  const char* phase = "";     // "start" (ml), "em", "als", "ml from EM's solution"
-  int start = 0, starts = 0;  // the multi-start's start (1-based) of how many; 0 for EM, ALS
-  int iteration = 0;          // 1, 2, ... within this start
+  const char* phase = "";         // "start" (ml), "em", "als", "ml from EM's solution"
+  int start = 0, starts = 0;      // the multi-start's start (1-based) of how many; 0 for EM, ALS
+  int iteration = 0;              // 1, 2, ... within this start
   const char* objective = "NLL";  // what `value` is: "NLL", or "cost" (least squares)
   double value = 0.0;
   double change = 0.0;  // value minus the previous iteration's

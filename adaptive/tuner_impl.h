@@ -689,14 +689,11 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
       conv = st.ok;
       result.starts.push_back(st);
     } else if (options.form == TunerForm::kLbfgs) {
-      const TuneProgress where{
-          .phase = "start", .start = int(s) + 1, .starts = int(points.size())};
+      const TuneProgress where{.phase = "start", .start = int(s) + 1, .starts = int(points.size())};
       result.starts.push_back(RunLbfgs(objective, options, lower, upper, from, &conv, where));
     } else {
-      const TuneProgress where{.phase = "start",
-                               .start = int(s) + 1,
-                               .starts = int(points.size()),
-                               .objective = "cost"};
+      const TuneProgress where{
+          .phase = "start", .start = int(s) + 1, .starts = int(points.size()), .objective = "cost"};
       result.starts.push_back(
           RunLeastSquares(objective, options, lower, upper, from, M, &conv, where));
     }

@@ -100,7 +100,7 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
     fig.dat() << "\n";
   }
   const size_t z0 = 2 + 4 * states.size();  // first measurement column
-  std::vector<size_t> own_panel;             // outputs not named like a state
+  std::vector<size_t> own_panel;            // outputs not named like a state
   for (size_t j = 0; j < outputs.size(); ++j)
     if (sc.model->StateIndex(outputs[j]) < 0) own_panel.push_back(j);
   const size_t panels = states.size() + own_panel.size();
@@ -118,7 +118,8 @@ void EstimateFigure(const ScenarioConfig& sc, int run, const ComboName& cn, cons
       << " with filledcurves fillstyle solid 1.0 noborder lc rgb '#c6dbef' title '+-2 sd'";
     for (size_t j = 0; j < outputs.size(); ++j)
       if (outputs[j] == states[i]) b << ", \\\n       '' using 1:" << z0 + j << points;
-    if (sc.has_truth) b << ", \\\n       '' using 1:" << c0 << " with lines lw 2 lc rgb 'black' title 'truth'";
+    if (sc.has_truth)
+      b << ", \\\n       '' using 1:" << c0 << " with lines lw 2 lc rgb 'black' title 'truth'";
     b << ", \\\n       '' using 1:" << c0 + 1
       << " with lines lw 1.5 lc rgb '#1f77b4' title 'estimate'\n";
   }
@@ -171,8 +172,8 @@ void ConsistencyFigure(const ScenarioConfig& sc, const std::vector<ComboName>& c
   auto& c = cons.body();
   c << "  set multiplot layout " << (sc.has_truth ? 2 : 1) << ",1 title "
     << GnuplotText(sc.name +
-                    (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
-                    " across runs, 95 % bounds dashed")
+                   (sc.has_truth ? ": mean NEES and NIS" : ": mean NIS (no truth: no NEES)") +
+                   " across runs, 95 % bounds dashed")
     << "\n"
     << GnuplotLogAxis("y");
   for (int panel = sc.has_truth ? 0 : 1; panel < 2; ++panel) {
@@ -276,7 +277,7 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   auto& b = fig.body();
   b << "  set multiplot layout " << panels.size() << ",1 title "
     << GnuplotText(sc.name + ": " + what +
-                    ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
+                   ", 95 % CI of the mean (blue oracle, red tuned, grey hand)")
     << "\n"
     << "  set yrange [" << double(combos.size()) - 0.5 << ":-0.5]\n"
     << "  set lmargin " << longest + 3 << "\n  unset key\n  set ytics noenhanced\n"
@@ -349,8 +350,9 @@ void SigmaFigure(const ScenarioConfig& sc, int run, const std::vector<ComboName>
   auto& b = fig.body();
   b << "  set multiplot layout " << states.size() << ",1 title "
     << GnuplotText(sc.name + ", run " + std::to_string(run) +
-                    ": filter standard deviation sqrt(P) over time (log scale)")
-    << "\n" << GnuplotLogAxis("y");
+                   ": filter standard deviation sqrt(P) over time (log scale)")
+    << "\n"
+    << GnuplotLogAxis("y");
   StatePanels(sc, combos, blocks, "sd ", rows_per_block / 15, &fig);
   b << "  unset multiplot\n";
   scripts->push_back(fig.Write(term, 900, 300 * int(states.size()) + 60));
@@ -394,8 +396,8 @@ void SweepFigures(const StudyConfig& c, const CsvText& summary, const std::strin
     auto& b = fig.body();
     b << "  set multiplot layout " << (states.size() + 1) / 2 << ",2 title "
       << GnuplotText(base + ": mean RMSE over runs vs " + key + " (95 % CI of the mean)") << "\n"
-      << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n" << GnuplotLogAxis("y")
-      << "  set xlabel " << GnuplotText(key + " (scenario label)")
+      << "  set xrange [-0.5:" << double(scs.size()) - 0.5 << "]\n"
+      << GnuplotLogAxis("y") << "  set xlabel " << GnuplotText(key + " (scenario label)")
       << "\n  set xtics rotate by -40 noenhanced\n  set key inside top left\n";
     for (size_t i = 0; i < states.size(); ++i) {
       b << "  set ylabel " << GnuplotText(Label(first.model->name, "RMSE " + states[i]))

@@ -80,7 +80,7 @@ struct RowLayout {
   // nu_<output>, S_<output> [, S_<a>_<b>], nis, loglik: the filter's, not a
   // smoother's.
   bool innovations = true;
-  bool lag_one = false;     // smooth --full-cov: lag1_<a>_<b> = Cov(a_k, b_{k+1} | all data)
+  bool lag_one = false;  // smooth --full-cov: lag1_<a>_<b> = Cov(a_k, b_{k+1} | all data)
 };
 
 // t, <state>_est, <state>_var [, cov_<a>_<b>] [, lag1_<a>_<b>]
@@ -200,8 +200,7 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
 // The particle filter's ESS figures in *s and, for a degenerate run (and
 // only when nothing failed before), the status "degenerate" with the step,
 // the time and the usual remedies.
-inline void ReportDegeneracy(const DegeneracyMonitor& d, const FilterData& data,
-                             FilterSummary* s) {
+inline void ReportDegeneracy(const DegeneracyMonitor& d, const FilterData& data, FilterSummary* s) {
   s->particles = d.particles();
   s->min_ess = d.min_ess();
   s->mean_ess = d.mean_ess();
@@ -213,10 +212,10 @@ inline void ReportDegeneracy(const DegeneracyMonitor& d, const FilterData& data,
   s->message = "particle filter degenerate: the effective sample size stayed below " +
                FormatNumber(DegeneracyMonitor::Threshold(d.particles())) + " of " +
                std::to_string(d.particles()) + " particles for " +
-               std::to_string(DegeneracyMonitor::kDegenerateRun) +
-               " updates in a row up to step " + std::to_string(k) + " (t = " +
-               FormatNumber(data.t[k]) + "); " + std::to_string(d.collapsed_updates()) +
-               " updates collapsed, smallest ESS " + FormatNumber(d.min_ess()) +
+               std::to_string(DegeneracyMonitor::kDegenerateRun) + " updates in a row up to step " +
+               std::to_string(k) + " (t = " + FormatNumber(data.t[k]) + "); " +
+               std::to_string(d.collapsed_updates()) + " updates collapsed, smallest ESS " +
+               FormatNumber(d.min_ess()) +
                ". Its estimates follow a single particle. Try a larger R (--r-diag; the "
                "measurement noise is often larger than the sensor's resolution), more particles "
                "(--particles), or a narrower prior (--p0-diag)";

@@ -85,7 +85,7 @@ struct FilterSummary {
   bool ok = true;
   std::string status = "ok";
   std::string message;
-  long adapt_clips = 0;  // adaptive: eigenvalue clips applied to keep Q, R SPD
+  long adapt_clips = 0;    // adaptive: eigenvalue clips applied to keep Q, R SPD
   std::vector<double> x0;  // the prior mean used (x0 = first-sample: this file's)
   // Particle filters (degeneracy.h): the particle count, the smallest and
   // the mean effective sample size over the updates, how many updates
