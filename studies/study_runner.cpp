@@ -31,6 +31,8 @@
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "studies/study_metrics.h"
+#include "studies/study_runner_parts.h"
+#include "studies/study_tuning.h"
 
 namespace fs = std::filesystem;
 
@@ -51,13 +53,6 @@ std::string Sig6(double v) {
   if (std::isnan(v)) return "";
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-std::string Sig10(double v) {
-  if (std::isnan(v)) return "";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
   return buf;
 }
 
@@ -97,6 +92,17 @@ uint64_t ComboSeed(uint64_t run_seed, const std::string& filter, const std::stri
   return DeriveSeed({run_seed, ConfigHash("filter:" + filter), ConfigHash("noise:" + noise)});
 }
 
+}  // namespace
+
+namespace study_runner {
+
+std::string Sig10(double v) {
+  if (std::isnan(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
 std::vector<double> SampleX0(const ScenarioConfig& sc, uint64_t run_seed) {
   const int n = int(sc.truth.x0.size());
   Eigen::MatrixXd P(n, n);
@@ -111,6 +117,38 @@ std::vector<double> SampleX0(const ScenarioConfig& sc, uint64_t run_seed) {
   for (int i = 0; i < n; ++i) x0[i] += d(i);
   return x0;
 }
+
+
+// The measurements (and truth) of a simulated trajectory, as a filter reads
+// them. With meas-noise = poisson the simulator drew no measurement noise and
+// the counts are added here from their own stream DeriveSeed({seed, "pois"}).
+FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth,
+                         const std::string& label, uint64_t seed) {
+  Rng poisson(DeriveSeed({seed, 0x706F6973ull}));
+  const int n = int(sc.model->states.size());
+  FilterData data;
+  data.path = label;
+  data.m = int(truth.columns.size()) - 1 - n;
+  data.has_truth = true;
+  for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
+    const auto& row = truth.rows[k];
+    data.t.push_back(row[0]);
+    data.lines.push_back(long(k));
+    for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
+    for (int j = 0; j < data.m; ++j)
+      data.z.push_back(row[1 + n + j] +
+                       (sc.poisson_meas ? PoissonCount(poisson, sc.poisson_lambda[j]) : 0.0));
+  }
+  return data;
+}
+
+}  // namespace study_runner
+
+namespace {
+
+using study_runner::DataFromTruth;
+using study_runner::SampleX0;
+using study_runner::Sig10;
 
 int Column(const std::vector<std::string>& cols, const std::string& name) {
   for (size_t i = 0; i < cols.size(); ++i)
@@ -157,28 +195,6 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
   file.Commit();
 }
 
-// The measurements (and truth) of a simulated trajectory, as a filter reads
-// them. With meas-noise = poisson the simulator drew no measurement noise and
-// the counts are added here from their own stream DeriveSeed({seed, "pois"}).
-FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth,
-                         const std::string& label, uint64_t seed) {
-  Rng poisson(DeriveSeed({seed, 0x706F6973ull}));
-  const int n = int(sc.model->states.size());
-  FilterData data;
-  data.path = label;
-  data.m = int(truth.columns.size()) - 1 - n;
-  data.has_truth = true;
-  for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
-    const auto& row = truth.rows[k];
-    data.t.push_back(row[0]);
-    data.lines.push_back(long(k));
-    for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
-    for (int j = 0; j < data.m; ++j)
-      data.z.push_back(row[1 + n + j] +
-                       (sc.poisson_meas ? PoissonCount(poisson, sc.poisson_lambda[j]) : 0.0));
-  }
-  return data;
-}
 
 // The runs.csv fields of the metrics that need no truth (study_metrics.h):
 // nll_per_step, nis_lo95, nis_hi95, pred_rmse_OUTPUT for every output column
@@ -314,109 +330,6 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
       WriteTimeseries(ctx, sc, run, fname, nname, data, out);
   }
   return text;
-}
-
-// ---------------------------------------------------------------------------
-// Noise `tuned`: fit Q/R once per scenario x filter x noise before the runs.
-
-constexpr uint64_t kTuneSeedTag = 0x74756E65ull;  // "tune"
-
-std::string JoinValues(const std::vector<double>& v) {
-  std::string out;
-  for (double x : v) {
-    if (!out.empty()) out += ' ';
-    out += Sig10(x);
-  }
-  return out;
-}
-
-// "L=0.49;b=0.31": the model parameters fitted with the noise (params =
-// tuned ...), "" when none.
-std::string TunedParamsText(const TuneResult& r) {
-  std::string out;
-  for (size_t i = 0; i < r.param_names.size(); ++i)
-    out += (i ? ";" : "") + r.param_names[i] + "=" + Sig10(r.param_values[i]);
-  return out;
-}
-
-std::vector<std::string> TunedColumns() {
-  return {"scenario",    "filter",    "noise",      "status",  "datasets", "updates",
-          "nll_initial", "nll_tuned", "iterations", "q_param", "r_param",  "qc",
-          "q",           "r",         "message",    "params"};
-}
-
-// Runs every tuning (in parallel over `jobs` threads, results in a fixed
-// order), puts the tuned Q/R into the combos and returns tuned.csv's text
-// ("" when nothing is tuned). Deterministic: the tuning trajectories have
-// their own seeds, DeriveSeed({seed, s, "tune", k}).
-std::string TuneNoise(StudyConfig* config, int jobs) {
-  struct Job {
-    int s, c;
-  };
-  std::vector<Job> job_list;
-  for (size_t s = 0; s < config->scenarios.size(); ++s)
-    for (size_t c = 0; c < config->scenarios[s].combos.size(); ++c)
-      if (config->scenarios[s].combos[c].tune) job_list.push_back({int(s), int(c)});
-  if (job_list.empty()) return "";
-  std::vector<std::string> rows(job_list.size());
-  std::atomic<size_t> next{0};
-  auto work = [&] {
-    for (size_t j; (j = next.fetch_add(1)) < job_list.size();) {
-      const int s = job_list[j].s;
-      ScenarioConfig& sc = config->scenarios[s];
-      Combo& cb = sc.combos[job_list[j].c];
-      std::vector<FilterData> datasets;
-      std::string failure;
-      if (sc.recorded) datasets = sc.tune_runs;
-      for (int k = 0; k < cb.tune_datasets && failure.empty() && !sc.recorded; ++k) {
-        SimulationSpec sim = sc.truth;
-        sim.seed = DeriveSeed({config->study.seed, uint64_t(s), kTuneSeedTag, uint64_t(k)});
-        if (sc.sample_x0) sim.x0 = SampleX0(sc, sim.seed);
-        try {
-          const SimulationResult truth = sc.model->simulate(sim);
-          if (!truth.ok)
-            failure = "tuning trajectory " + std::to_string(k) + ": " + truth.error;
-          else
-            datasets.push_back(
-                DataFromTruth(sc, truth, "tuning trajectory " + std::to_string(k), sim.seed));
-        } catch (const std::exception& e) {
-          failure = "tuning trajectory " + std::to_string(k) + ": " + e.what();
-        }
-      }
-      TuneResult r;
-      if (failure.empty()) {
-        try {
-          r = sc.model->tune(cb.spec, cb.tuner, datasets);
-          if (!r.IsSolutionUsable()) failure = "tuning failed: " + r.message;
-        } catch (const std::exception& e) {
-          failure = std::string("tuning failed: ") + e.what();
-        }
-      }
-      if (failure.empty()) {
-        FilterSpec tuned = r.tuned_spec;
-        tuned.has_t0 = cb.spec.has_t0;
-        tuned.t0 = cb.spec.t0;
-        tuned.smooth = cb.spec.smooth;  // a smoother kind tunes its filter, then smooths
-        cb.spec = tuned;
-      } else {
-        cb.tune_failure = failure;
-      }
-      rows[j] = FormatCsvRow(
-          {sc.name, config->filters[cb.filter].name, config->noises[cb.noise].name,
-           failure.empty() ? TuneStatusName(r.status) : "failed", std::to_string(cb.tune_datasets),
-           std::to_string(r.updates), Sig10(r.nll_initial), Sig10(r.nll_tuned),
-           std::to_string(r.iterations), NoiseParamName(cb.tuner.q_param),
-           NoiseParamName(cb.tuner.r_param), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
-           JoinValues(r.r), failure, TunedParamsText(r)});
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 0; w < std::max(1, std::min<int>(jobs, int(job_list.size()))); ++w)
-    threads.emplace_back(work);
-  for (auto& t : threads) t.join();
-  std::string csv = FormatCsvRow(TunedColumns());
-  for (const auto& r : rows) csv += r;
-  return csv;
 }
 
 // ---------------------------------------------------------------------------
@@ -559,6 +472,26 @@ std::string StudyManifestJson(const StudyConfig& c, const StudyState& state,
   return j.str() + "\n";
 }
 
+namespace {
+
+// The end of this process's work: study.state and manifest.json say how it
+// ended, and when every run is done the summary files are written.
+StudyRunSummary Conclude(const StudyConfig& config, const std::string& dir, double previous_wall,
+                         std::chrono::steady_clock::time_point wall_start, StudyState* state,
+                         StudyRunSummary* summary) {
+  summary->wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  state->wall_s = previous_wall + summary->wall_s;
+  state->finished = NowUtc();
+  state->status = summary->interrupted ? "interrupted" : "complete";
+  WriteStudyState(dir, *state);
+  if (!summary->interrupted) summary->report = FinalizeStudy(config, dir);
+  WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, *state));
+  return *summary;
+}
+
+}  // namespace
+
 StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
@@ -638,16 +571,27 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
 
   WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
 
-  // Tuned noise settings (a copy of the config carries the tuned Q/R).
+  StudyRunSummary summary;
+  // Tuned noise settings (a copy of the config carries the tuned Q/R), each
+  // saved in DIR/tuning/ as it is found and reused on resume.
+  // A complete folder (nothing to run, tuned.csv there) needs none.
   StudyConfig tuned_config = config;
   if (!tasks.empty() || !fs::exists(dir + "/tuned.csv")) {
-    bool any_tuned = false;
-    for (const auto& sc : config.scenarios)
-      for (const auto& cb : sc.combos) any_tuned |= cb.tune;
-    if (any_tuned && options.progress)
-      std::cerr << "estlab study: tuning Q/R for the 'tuned' noise settings...\n";
-    const std::string tuned_csv = TuneNoise(&tuned_config, jobs);
-    if (!tuned_csv.empty()) WriteTextFile(dir + "/tuned.csv", tuned_csv);
+    StudyTuningOptions tuning;
+    tuning.dir = dir;
+    tuning.jobs = jobs;
+    tuning.progress = options.progress;
+    tuning.stop = options.stop;
+    const StudyTuningSummary t = TuneStudyNoise(&tuned_config, tuning);
+    summary.tunings = t.total;
+    summary.reused_tunings = t.reused;
+    if (t.interrupted) {  // stopped while tuning: no run started
+      summary.total_runs = total;
+      summary.resumed_runs = summary.finished_runs = long(finished.size());
+      summary.interrupted = true;
+      return Conclude(config, dir, previous_wall, wall_start, &state, &summary);
+    }
+    if (!t.csv.empty()) WriteTextFile(dir + "/tuned.csv", t.csv);
   }
 
   RunContext ctx;
@@ -702,7 +646,6 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   if (!tasks.empty())
     for (int w = 0; w < workers; ++w) threads.emplace_back(worker);
 
-  StudyRunSummary summary;
   summary.total_runs = total;
   summary.resumed_runs = long(finished.size());
   Progress progress(total, summary.resumed_runs, options.progress);
@@ -749,15 +692,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
 
   summary.finished_runs = done;
   summary.interrupted = done < total;
-  summary.wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  state.wall_s = previous_wall + summary.wall_s;
-  state.finished = NowUtc();
-  state.status = summary.interrupted ? "interrupted" : "complete";
-  WriteStudyState(dir, state);
-  if (!summary.interrupted) summary.report = FinalizeStudy(config, dir);
-  WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
-  return summary;
+  return Conclude(config, dir, previous_wall, wall_start, &state, &summary);
 }
 
 }  // namespace estlab

@@ -54,6 +54,8 @@ struct StudyRunSummary {
   long resumed_runs = 0;        // found finished in runs.csv at the start
   long finished_runs = 0;       // finished now (including resumed)
   long failed_filter_runs = 0;  // filter x noise results with status != ok
+  int tunings = 0;              // 'tuned' scenario x filter x noise combinations
+  int reused_tunings = 0;       // of them found in DIR/tuning/ (study_tuning.h)
   bool interrupted = false;
   double wall_s = 0.0;
   std::string report;  // report.md text when complete

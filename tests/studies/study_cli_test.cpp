@@ -191,6 +191,50 @@ TEST_F(StudyCli, TunedNoiseIsFittedOnceAndReported) {
   EXPECT_NE(RunsCsv(dir_, "t1").find("pend,ukf,tuned,2,"), std::string::npos);
 }
 
+// Issue 15 items 15 and 16: each tuning is saved in DIR/tuning/ as it
+// finishes and reused on resume (a study killed while tuning keeps what it
+// tuned), with a progress line per tuning. Here the second tuning's file is
+// deleted, as if the study had been killed after the first: the resume tunes
+// only the second and ends byte-identical to an uninterrupted study.
+TEST_F(StudyCli, ResumeReusesSavedTuningsAndShowsTuningProgress) {
+  WriteText(dir_.File("s.ini"), TinyStudy(4, 25, 100, /*tuned=*/true));
+  const auto full = RunEstlab("study s.ini --out full --jobs 1", dir_.path());
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  EXPECT_NE(full.err.find("estlab study: tuning Q/R of 2 'tuned' noise setting(s)...\n"),
+            std::string::npos)
+      << full.err;
+  EXPECT_NE(full.err.find("estlab study: tuned 1/2: pend/ekf/tuned tuned in "), std::string::npos)
+      << full.err;
+  EXPECT_NE(full.err.find("estlab study: tuned 2/2: pend/ukf/tuned tuned in "), std::string::npos)
+      << full.err;
+  ASSERT_TRUE(dir_.Exists("full/tuning/pend.ekf.tuned.tuned"));
+
+  ASSERT_EQ(RunEstlab("study s.ini --out part --runs 2 --quiet", dir_.path()).exit_code, 0);
+  std::filesystem::remove(dir_.File("part/tuning/pend.ukf.tuned.tuned"));
+  const auto resumed = RunEstlab("study s.ini --out part --jobs 2", dir_.path());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("tuning Q/R of 1 'tuned' noise setting(s) (1 reused from "
+                             "part/tuning)...\n"),
+            std::string::npos)
+      << resumed.err;
+  EXPECT_NE(resumed.err.find("tuned 2/2: pend/ukf/tuned tuned in "), std::string::npos)
+      << resumed.err;
+  EXPECT_EQ(resumed.err.find("pend/ekf/tuned tuned in"), std::string::npos) << resumed.err;
+  for (const char* f : {"tuned.csv", "runs.csv", "steps.csv", "summary.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("full/") + f)),
+              ReadFile(dir_.File(std::string("part/") + f)))
+        << f;
+  // A saved result of another configuration is never taken: it is tuned again.
+  WriteText(dir_.File("part/tuning/pend.ekf.tuned.tuned"),
+            Replace(ReadFile(dir_.File("part/tuning/pend.ekf.tuned.tuned")), "config-hash = ",
+                    "config-hash = 0"));
+  const auto more = RunEstlab("study s.ini --out part --runs 5", dir_.path());
+  ASSERT_EQ(more.exit_code, 0) << more.err;
+  EXPECT_NE(more.err.find("tuning Q/R of 1 'tuned' noise setting(s) (1 reused"), std::string::npos)
+      << more.err;
+  EXPECT_NE(more.err.find("pend/ekf/tuned tuned in"), std::string::npos) << more.err;
+}
+
 TEST_F(StudyCli, FiguresWriteScriptsDataAndImages) {
   WriteText(dir_.File("s.ini"), TinyStudy(3));
   ASSERT_EQ(RunEstlab("study s.ini --out r --quiet", dir_.path()).exit_code, 0);
