@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "src/core/hash.h"
 #include "src/core/types.h"
 #include "src/io/folder_lock.h"
 #include "src/io/output_file.h"
@@ -80,13 +81,6 @@ std::vector<std::string> SplitCsv(const std::string& line) {
   return fields;
 }
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::string Join(const std::vector<std::string>& v, const std::string& sep) {
   std::string out;
   for (size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
@@ -139,7 +133,7 @@ int CsvText::Column(const std::string& name) const {
 CsvText ReadCsvText(const std::string& path) {
   if (!fs::exists(path)) throw InputError("cannot read '" + path + "'");
   CsvText t;
-  std::istringstream in(ReadAll(path));
+  std::istringstream in(ReadWholeFile(path));
   std::string line;
   bool header = true;
   while (std::getline(in, line)) {
@@ -203,13 +197,25 @@ RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& col
   return f;
 }
 
+std::string ReadWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void ForEachRow(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
+                const std::function<void(const std::vector<std::string>&)>& visit) {
+  StreamRowFile(path, columns, dropped, visit);
+}
+
 // ---------------------------------------------------------------------------
 
 StudyConfig LoadResultsConfig(const std::string& dir, const StudyState& state) {
   const std::string copy = dir + "/config.ini";
   const bool original_folder =
       !state.config_path.empty() && fs::is_directory(fs::path(state.config_path).parent_path());
-  return ParseStudyConfig(ReadAll(copy), original_folder ? state.config_path : copy);
+  return ParseStudyConfig(ReadWholeFile(copy), original_folder ? state.config_path : copy);
 }
 
 void WriteStudyState(const std::string& dir, const StudyState& s) {
@@ -222,19 +228,26 @@ void WriteStudyState(const std::string& dir, const StudyState& s) {
       << "\nfinished = " << s.finished << "\nwall-s = " << Num(s.wall_s) << "\njobs = " << s.jobs
       << "\n";
   if (!s.config_path.empty()) out << "config-path = " << s.config_path << "\n";
+  for (const FileDigest& f : s.files)
+    out << "file = " << f.bytes << " " << HashHex(f.fnv) << " " << f.path << "\n";
   WriteTextFile(dir + "/study.state", out.str());
 }
 
 bool ReadStudyState(const std::string& dir, StudyState* s) {
   const std::string path = dir + "/study.state";
   if (!fs::exists(path)) return false;
-  std::istringstream in(ReadAll(path));
+  std::istringstream in(ReadWholeFile(path));
   std::string line;
   std::map<std::string, std::string> kv;
+  std::vector<std::string> files;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
     const auto eq = line.find(" = ");
-    if (eq != std::string::npos) kv[line.substr(0, eq)] = line.substr(eq + 3);
+    if (eq == std::string::npos) continue;
+    if (line.compare(0, eq, "file") == 0)
+      files.push_back(line.substr(eq + 3));
+    else
+      kv[line.substr(0, eq)] = line.substr(eq + 3);
   }
   try {
     s->config_hash = std::stoull(kv.at("config-hash"), nullptr, 16);
@@ -248,6 +261,13 @@ bool ReadStudyState(const std::string& dir, StudyState* s) {
     s->wall_s = kv["wall-s"].empty() ? 0.0 : std::stod(kv["wall-s"]);
     s->jobs = kv["jobs"].empty() ? 1 : std::stoi(kv["jobs"]);
     s->config_path = kv["config-path"];
+    s->files.clear();
+    for (const std::string& f : files) {  // "BYTES FNV PATH"
+      const size_t a = f.find(' '), b = f.find(' ', a + 1);
+      if (a == std::string::npos || b == std::string::npos) throw InputError("file line");
+      s->files.push_back(
+          {f.substr(b + 1), std::stoull(f.substr(0, a)), std::stoull(f.substr(a + 1, b - a - 1), nullptr, 16)});
+    }
   } catch (const std::exception&) {
     throw InputError(path + ": damaged study state file");
   }
@@ -540,98 +560,6 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
   const std::string report = StudyReportMarkdown(config, tables, state);
   WriteTextFile(dir + "/report.md", report);
   return report;
-}
-
-// ---------------------------------------------------------------------------
-
-void MergeStudies(const std::string& out, const std::vector<std::string>& shard_dirs) {
-  if (shard_dirs.empty()) throw InputError("merge: no shard folders given");
-  if (fs::exists(out) && !(fs::is_directory(out) && FolderIsEmptyButLock(out)))
-    throw InputError("merge: '" + out + "' exists and is not an empty folder");
-  std::vector<StudyState> states(shard_dirs.size());
-  for (size_t i = 0; i < shard_dirs.size(); ++i) {
-    if (!ReadStudyState(shard_dirs[i], &states[i]))
-      throw InputError("merge: '" + shard_dirs[i] +
-                       "' is not a study results folder (no study.state)");
-  }
-  const std::string config_text = ReadAll(shard_dirs[0] + "/config.ini");
-  const StudyConfig config = LoadResultsConfig(shard_dirs[0], states[0]);
-  const StudyState& first = states[0];
-  if (ConfigHash(config_text) != first.config_hash)
-    throw InputError("merge: " + shard_dirs[0] + "/config.ini does not match its study.state");
-  std::set<int> shards_seen;
-  for (size_t i = 0; i < shard_dirs.size(); ++i) {
-    const StudyState& s = states[i];
-    if (s.config_hash != first.config_hash || s.runs != first.runs || s.shards != first.shards)
-      throw InputError("merge: '" + shard_dirs[i] +
-                       "' is a different study (config, runs or "
-                       "shard count differ from '" +
-                       shard_dirs[0] + "')");
-    if (!shards_seen.insert(s.shard).second)
-      throw InputError("merge: shard " + std::to_string(s.shard) + "/" + std::to_string(s.shards) +
-                       " given twice ('" + shard_dirs[i] + "')");
-    if (s.status != "complete")
-      throw InputError("merge: '" + shard_dirs[i] + "' is " + s.status +
-                       "; run its study command again to finish it");
-  }
-  if (int(shards_seen.size()) != first.shards) {
-    std::string missing;
-    for (int k = 1; k <= first.shards; ++k)
-      if (!shards_seen.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k);
-    throw InputError("merge: shard(s) " + missing + " of " + std::to_string(first.shards) +
-                     " missing");
-  }
-  fs::create_directories(out);
-  const FolderLock lock(out);  // a second merge into OUT fails here
-  if (!FolderIsEmptyButLock(out))
-    throw InputError("merge: '" + out + "' exists and is not an empty folder");
-  std::vector<std::vector<std::string>> runs, steps, timing;
-  double wall = 0.0;
-  for (size_t i = 0; i < shard_dirs.size(); ++i) {
-    const auto add = [&](const std::string& name, const std::vector<std::string>& cols,
-                         std::vector<std::vector<std::string>>* rows) {
-      RowFile f = ReadRowFile(shard_dirs[i] + "/" + name, cols);
-      for (auto& r : f.rows) rows->push_back(std::move(r));
-    };
-    add("runs.csv", RunsColumns(config), &runs);
-    add("steps.csv", StepsColumns(config), &steps);
-    add("timing.csv", TimingColumns(), &timing);
-    wall += states[i].wall_s;
-    const fs::path ts = fs::path(shard_dirs[i]) / "timeseries";
-    if (fs::exists(ts))
-      fs::copy(ts, fs::path(out) / "timeseries",
-               fs::copy_options::recursive | fs::copy_options::overwrite_existing);
-  }
-  std::set<std::string> seen;
-  for (const auto& r : runs)
-    if (!seen.insert(r[0] + "/" + r[1] + "/" + r[2] + "#" + r[3]).second)
-      throw InputError("merge: run " + r[3] + " of " + r[0] + "/" + r[1] + "/" + r[2] +
-                       " occurs in two shards");
-  WriteTextFile(out + "/config.ini", config_text);
-  // Tuned Q/R: every shard tuned the same way (own seeds); keep one copy.
-  const std::string tuned = fs::exists(shard_dirs[0] + "/tuned.csv")
-                                ? ReadAll(shard_dirs[0] + "/tuned.csv")
-                                : std::string();
-  for (const auto& d : shard_dirs)
-    if ((fs::exists(d + "/tuned.csv") ? ReadAll(d + "/tuned.csv") : std::string()) != tuned)
-      throw InputError("merge: " + d + "/tuned.csv differs from " + shard_dirs[0] + "/tuned.csv");
-  if (!tuned.empty()) WriteTextFile(out + "/tuned.csv", tuned);
-  WriteRowFile(out + "/runs.csv", RunsColumns(config), runs);
-  WriteRowFile(out + "/steps.csv", StepsColumns(config), steps);
-  WriteRowFile(out + "/timing.csv", TimingColumns(), timing);
-  StudyState merged = first;
-  merged.shard = merged.shards = 1;
-  merged.status = "complete";
-  merged.wall_s = wall;
-  merged.started = first.started;
-  merged.finished = first.finished;
-  for (const auto& s : states) {
-    merged.started = std::min(merged.started, s.started);
-    merged.finished = std::max(merged.finished, s.finished);
-  }
-  WriteStudyState(out, merged);
-  FinalizeStudy(config, out);
-  WriteTextFile(out + "/manifest.json", StudyManifestJson(config, merged, shard_dirs));
 }
 
 }  // namespace estlab

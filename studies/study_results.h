@@ -23,6 +23,7 @@
 #define ESTLAB_STUDIES_STUDY_RESULTS_H_
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,7 +45,13 @@ struct RowFile {
   bool dropped_partial = false;
 };
 RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& columns);
+// The same, one row at a time (memory does not grow with the file);
+// *dropped as RowFile::dropped_partial.
+void ForEachRow(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
+                const std::function<void(const std::vector<std::string>&)>& visit);
 std::string FormatCsvRow(const std::vector<std::string>& fields);
+// A file's bytes; "" when it cannot be read.
+std::string ReadWholeFile(const std::string& path);
 
 // Any CSV with a header row, as text (summary.csv, time_metrics.csv).
 struct CsvText {
@@ -53,6 +60,17 @@ struct CsvText {
   int Column(const std::string& name) const;  // -1 when absent
 };
 CsvText ReadCsvText(const std::string& path);  // throws InputError when unreadable
+
+// A result file's checksum (study_integrity.h): its path in the folder,
+// byte size and 64-bit FNV-1a.
+struct FileDigest {
+  std::string path;
+  uint64_t bytes = 0;
+  uint64_t fnv = 0;
+  bool operator==(const FileDigest& o) const {
+    return path == o.path && bytes == o.bytes && fnv == o.fnv;
+  }
+};
 
 // The study.state file.
 struct StudyState {
@@ -66,6 +84,9 @@ struct StudyState {
   // The absolute path of the config file the study was started from: the
   // folder that relative paths in it (model files, data) are relative to.
   std::string config_path;
+  // When complete: the checksum of every result file ("file = PATH BYTES
+  // FNV" lines), for `estlab merge` to check the folder against.
+  std::vector<FileDigest> files;
 };
 void WriteStudyState(const std::string& dir, const StudyState& state);
 // Returns false when DIR has no study.state.

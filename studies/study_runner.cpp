@@ -30,6 +30,7 @@
 #include "src/io/folder_lock.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "studies/study_integrity.h"
 #include "studies/study_metrics.h"
 #include "studies/study_runner_parts.h"
 #include "studies/study_tuning.h"
@@ -485,7 +486,11 @@ StudyRunSummary Conclude(const StudyConfig& config, const std::string& dir, doub
   state->finished = NowUtc();
   state->status = summary->interrupted ? "interrupted" : "complete";
   WriteStudyState(dir, *state);
-  if (!summary->interrupted) summary->report = FinalizeStudy(config, dir);
+  if (!summary->interrupted) {
+    summary->report = FinalizeStudy(config, dir);
+    state->files = DigestResultFiles(dir);  // for merge to check the folder against
+    WriteStudyState(dir, *state);
+  }
   WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, *state));
   return *summary;
 }
@@ -536,22 +541,20 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   if (!resuming || state.started.empty()) state.started = NowUtc();
   const double previous_wall = resuming ? state.wall_s : 0.0;
   state.finished.clear();
+  state.files.clear();  // the files change from here on
   WriteStudyState(dir, state);
 
-  // Finished runs: every filter x noise row present; keep only their rows.
+  // Finished runs: every filter x noise row present in all three files
+  // (study_integrity.h); keep only their rows. Damaged runs are run again.
   const auto runs_cols = RunsColumns(config), steps_cols = StepsColumns(config);
   std::set<std::pair<std::string, long>> finished;
   {
-    const RowFile f = ReadRowFile(dir + "/runs.csv", runs_cols);
-    std::map<std::pair<std::string, long>, size_t> count;
-    for (const auto& r : f.rows) ++count[{r[0], std::stol(r[3])}];
-    for (const auto& sc : config.scenarios)
-      for (long i = 0; i < ScenarioRuns(sc, runs); ++i) {
-        const auto it = count.find({sc.name, i});
-        if (it != count.end() && it->second == sc.combos.size() &&
-            i % options.shards == options.shard - 1)
-          finished.insert({sc.name, i});
-      }
+    const RunCoverage coverage = CheckRunCoverage(config, dir, runs, options.shard, options.shards);
+    finished = coverage.complete;
+    if (coverage.damaged > 0)
+      std::cerr << "estlab study: " << coverage.damaged << " finished run(s) in '" << dir
+                << "' have rows missing or extra (" << coverage.damage.front()
+                << "); running them again\n";
     KeepFinished(dir + "/runs.csv", runs_cols, finished);
     KeepFinished(dir + "/steps.csv", steps_cols, finished);
     KeepFinished(dir + "/timing.csv", TimingColumns(), finished);
@@ -597,10 +600,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   RunContext ctx;
   ctx.config = &tuned_config;
   ctx.dir = dir;
-  int max_steps = 1;
-  for (const auto& sc : config.scenarios) max_steps = std::max(max_steps, sc.steps + 1);
-  ctx.every = config.study.step_metrics_every > 0 ? config.study.step_metrics_every
-                                                  : (max_steps + 99) / 100;
+  ctx.every = StepMetricsEvery(config);
   ctx.keep.insert(config.study.keep_runs.begin(), config.study.keep_runs.end());
   // The time-series folders, here rather than racing in the workers.
   if (!ctx.keep.empty())

@@ -27,15 +27,6 @@ std::string ResolveSymlinks(const std::string& path) {
   throw InputError("cannot resolve the symbolic link '" + path + "'");
 }
 
-// ".estlab-<pid>-<n>.tmp" beside `target`: short, so any name that fits the
-// file system's 255-byte limit can be written.
-std::string TempPathBeside(const std::string& target) {
-  static int counter = 0;
-  const std::string name =
-      ".estlab-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp";
-  return (fs::path(target).parent_path() / name).string();
-}
-
 }  // namespace
 
 OutputFile::OutputFile(const std::string& path) : path_(path) {

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <atomic>
 #include <mutex>
 
 namespace estlab {
@@ -43,6 +44,13 @@ long TempFilePid(const std::string& name) {
 
 }  // namespace
 
+std::string TempPathBeside(const std::string& target) {
+  static std::atomic<long> counter{0};  // OutputFiles are made by worker threads too
+  const std::string name =
+      ".estlab-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp";
+  return (std::filesystem::path(target).parent_path() / name).string();
+}
+
 void RegisterTempFile(const std::string& path) {
   if (path.size() >= kPathBytes) return;  // not cleaned on a signal; still removed normally
   std::lock_guard<std::mutex> lock(g_mutex);
@@ -77,9 +85,9 @@ int RemoveStaleTempFiles(const std::string& folder) {
   for (fs::directory_iterator it(folder.empty() ? "." : folder, ec), end; !ec && it != end;
        it.increment(ec)) {
     const long pid = TempFilePid(it->path().filename().string());
-    if (pid <= 0 || pid == long(::getpid()) || !it->is_regular_file(ec)) continue;
+    if (pid <= 0 || pid == long(::getpid()) || it->is_symlink(ec)) continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to see)
-    if (fs::remove(it->path(), ec)) ++removed;
+    if (fs::remove_all(it->path(), ec) > 0) ++removed;  // a file, or a folder (merge)
   }
   return removed;
 }

@@ -17,12 +17,18 @@
 
 namespace estlab {
 
+// ".estlab-<pid>-<n>.tmp" beside `target` (in its folder): short, so that
+// any name that fits the file system's 255-byte limit can be written; n
+// counts up per process (thread-safe).
+std::string TempPathBeside(const std::string& target);
+
 void RegisterTempFile(const std::string& path);
 void UnregisterTempFile(const std::string& path);
 void InstallTempFileCleanup();
 
 // Removes the files ".estlab-<pid>-<n>.tmp" of `folder` whose pid is not a
-// running process; returns how many.
+// running process, and the folders of that name (`estlab merge` builds its
+// OUT in one); returns how many.
 int RemoveStaleTempFiles(const std::string& folder);
 
 }  // namespace estlab

@@ -10,11 +10,13 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <thread>
 
 #include "../cli/cli_test_util.h"
+#include "src/core/hash.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {
@@ -108,6 +110,154 @@ TEST_F(StudyCli, ThreeShardsMergedEqualOneRun) {
   const auto bad = RunEstlab("merge partial s1 s3", dir_.path());
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("shard(s) 2 of 3 missing"), std::string::npos) << bad.err;
+}
+
+// `estlab ARGS` with writes limited to `kb` KiB per file (as on a full
+// disk: a longer write fails with EFBIG, SIGXFSZ ignored).
+RunResult RunEstlabWithFileLimit(const std::string& args, const std::string& cwd, int kb) {
+  const std::string err = cwd + "/../limited.err";
+  const std::string cmd = "cd '" + cwd + "' && trap '' XFSZ && ulimit -f " + std::to_string(kb) +
+                          " && '" + ESTLAB_BINARY + "' " + args + " >/dev/null 2>'" + err + "'";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  r.err = ReadFile(err);
+  std::filesystem::remove(err);
+  return r;
+}
+
+// Names of the temporary files and folders (".estlab-<pid>-<n>.tmp") in dir.
+std::vector<std::string> TempEntries(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().rfind(".estlab-", 0) == 0)
+      names.push_back(e.path().filename().string());
+  return names;
+}
+
+// Issue 15 item 6: merge used to accept damaged shards (a missing file, a
+// run's rows deleted, a cut-off last line) and write a wrong summary. Each
+// shard is now checked against the checksums its study.state recorded when
+// it finished, and its runs against each other and its shard; the refusal
+// names the shard and the problem, and nothing is written.
+TEST_F(StudyCli, MergeRefusesDamagedShardsNamingTheProblem) {
+  WriteText(dir_.File("s.ini"), TinyStudy(4));
+  for (int k = 1; k <= 2; ++k)
+    ASSERT_EQ(RunEstlab("study s.ini --quiet --out s" + std::to_string(k) + " --shard " +
+                            std::to_string(k) + "/2",
+                        dir_.path())
+                  .exit_code,
+              0);
+  namespace fs = std::filesystem;
+  const auto damaged = [&](const std::function<void(const std::string&)>& damage,
+                           const std::string& expected) {
+    fs::remove_all(dir_.File("bad"));
+    fs::copy(dir_.File("s2"), dir_.File("bad"), fs::copy_options::recursive);
+    damage(dir_.File("bad"));
+    const auto r = RunEstlab("merge m s1 bad", dir_.path());
+    EXPECT_EQ(r.exit_code, 2) << expected;
+    EXPECT_NE(r.err.find("merge: shard 'bad' (2/2): " + expected), std::string::npos) << r.err;
+    EXPECT_FALSE(dir_.Exists("m"));
+    EXPECT_TRUE(TempEntries(dir_.path()).empty());
+  };
+  damaged([](const std::string& d) { fs::remove(d + "/steps.csv"); }, "steps.csv is missing");
+  const auto drop_rows = [](const std::string& path, const std::string& prefix) {
+    std::string kept;
+    for (const auto& line : SplitLines(ReadFile(path)))
+      if (!line.empty() && line.rfind(prefix, 0) != 0) kept += line + "\n";
+    WriteText(path, kept);
+  };
+  damaged([&](const std::string& d) { drop_rows(d + "/runs.csv", "pend,ekf,hand,3,"); },
+          "runs.csv has ");
+  damaged(
+      [](const std::string& d) {
+        const std::string text = ReadFile(d + "/steps.csv");
+        WriteText(d + "/steps.csv", text.substr(0, text.size() - 5));  // an interrupted copy
+      },
+      "steps.csv has ");
+  // Rows deleted and the checksum made to match: the run check finds it.
+  damaged(
+      [&](const std::string& d) {
+        drop_rows(d + "/steps.csv", "pend,ukf,oracle,1,0.1,");
+        const std::string steps = ReadFile(d + "/steps.csv");
+        std::string state;
+        for (const auto& line : SplitLines(ReadFile(d + "/study.state")))
+          state += (line.size() > 10 && line.substr(line.size() - 10) == " steps.csv"
+                        ? "file = " + std::to_string(steps.size()) + " " +
+                              HashHex(Fnv1a64(steps)) + " steps.csv"
+                        : line) +
+                   "\n";
+        WriteText(d + "/study.state", state);
+      },
+      "steps.csv has 24 rows of run 1 of pend (ukf/oracle), its 25 steps make 25");
+  damaged(
+      [](const std::string& d) {
+        std::string state;
+        for (const auto& line : SplitLines(ReadFile(d + "/study.state")))
+          if (line.rfind("file = ", 0) != 0) state += line + "\n";
+        WriteText(d + "/study.state", state);
+      },
+      "no checksums (finished by an older estlab)");
+  // The undamaged shards merge.
+  EXPECT_EQ(RunEstlab("merge m s1 s2", dir_.path()).exit_code, 0);
+}
+
+// Issue 15 item 11: a merge that fails while writing (a full disk) used to
+// leave a half-written OUT that a rerun refused. OUT is built in a
+// temporary folder beside it and renamed into place: after the failure
+// there is no OUT and no temporary folder, and the rerun succeeds; the
+// folder of a merge that was killed is removed by the next merge there.
+TEST_F(StudyCli, MergeOnAFullDiskLeavesNoOutAndARerunWorks) {
+  WriteText(dir_.File("s.ini"), TinyStudy(4));
+  for (int k = 1; k <= 2; ++k)
+    ASSERT_EQ(RunEstlab("study s.ini --quiet --out s" + std::to_string(k) + " --shard " +
+                            std::to_string(k) + "/2",
+                        dir_.path())
+                  .exit_code,
+              0);
+  const auto full = RunEstlabWithFileLimit("merge m s1 s2", dir_.path(), 4);
+  EXPECT_NE(full.exit_code, 0);
+  EXPECT_NE(full.err.find("estlab: error: "), std::string::npos) << full.err;
+  EXPECT_FALSE(dir_.Exists("m"));
+  EXPECT_TRUE(TempEntries(dir_.path()).empty());
+  // A killed merge's folder (a PID that is not running) goes at the next merge.
+  std::filesystem::create_directories(dir_.File(".estlab-4194303-0.tmp/timeseries"));
+  WriteText(dir_.File(".estlab-4194303-0.tmp/runs.csv"), "half");
+  const auto again = RunEstlab("merge m s1 s2", dir_.path());
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(TempEntries(dir_.path()).empty());
+  EXPECT_TRUE(dir_.Exists("m/summary.csv"));
+  // Merging into it again is refused and leaves it alone.
+  const std::string summary = ReadFile(dir_.File("m/summary.csv"));
+  const auto twice = RunEstlab("merge m s1 s2", dir_.path());
+  EXPECT_EQ(twice.exit_code, 2);
+  EXPECT_NE(twice.err.find("merge: 'm' exists and is not an empty folder"), std::string::npos)
+      << twice.err;
+  EXPECT_EQ(ReadFile(dir_.File("m/summary.csv")), summary);
+}
+
+// Issue 15 item 6, resume: a folder whose steps.csv was deleted (or lost a
+// run's rows) used to resume into incomplete files. The runs without their
+// rows are run again and the files end byte-identical to an intact study.
+TEST_F(StudyCli, ResumeRebuildsRunsWhoseRowsAreMissing) {
+  WriteText(dir_.File("s.ini"), TinyStudy(4));
+  ASSERT_EQ(RunEstlab("study s.ini --quiet --out all", dir_.path()).exit_code, 0);
+  namespace fs = std::filesystem;
+  fs::copy(dir_.File("all"), dir_.File("r"), fs::copy_options::recursive);
+  fs::remove(dir_.File("r/steps.csv"));
+  const auto r = RunEstlab("study s.ini --quiet --out r", dir_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("estlab study: 4 finished run(s) in 'r' have rows missing or extra "
+                       "(steps.csv has 0 rows of run 0 of pend (ekf/oracle), its 25 steps make "
+                       "25); running them again"),
+            std::string::npos)
+      << r.err;
+  for (const char* f : {"runs.csv", "steps.csv", "summary.csv", "time_metrics.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("all/") + f)),
+              ReadFile(dir_.File(std::string("r/") + f)))
+        << f;
+  EXPECT_EQ(SplitLines(ReadFile(dir_.File("r/timing.csv"))).size(),  // wall times differ
+            SplitLines(ReadFile(dir_.File("all/timing.csv"))).size());
 }
 
 // Starts `estlab study` with stderr to a file; returns the pid.
