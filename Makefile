@@ -13,7 +13,7 @@ export CCACHE_BASEDIR := $(CURDIR)
 # ... also for the sanitizer build (-g1): do not key on the build folder.
 export CCACHE_NOHASHDIR := 1
 
-.PHONY: all deps configure build install test test-asan demo bench format clean
+.PHONY: all deps configure build install test test-asan test-slurm demo bench format clean
 
 all: build
 
@@ -52,6 +52,13 @@ test-asan: deps
 	cmake --build $(ASAN_BUILD) -j$(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -L unit
+
+# A study through a real Slurm (issue 17): a one-node cluster on this machine
+# (Debian's slurm-wlm and munge, installed when missing; daemons started and
+# stopped by the script), `estlab study --slurm 3`, a cancelled shard
+# resubmitted; the merged results must equal a local run byte for byte.
+test-slurm: deps build
+	$(SUDO) tests/slurm/test_slurm.sh $(ESTLAB)
 
 # The demo: hand-tuned vs auto-tuned vs oracle Q/R in one scenario of each of
 # the five papers (studies/tuning_hand_vs_auto.ini) at DEMO_RUNS Monte Carlo

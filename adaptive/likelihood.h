@@ -149,6 +149,26 @@ class InnovationLikelihood {
     return WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
   }
 
+  // "" while the CVODES work of the running evaluation is within its bound
+  // (TunerOptions::max_integrator_steps), else why this trial point is
+  // infeasible.
+  std::string WorkBoundMessage() const {
+    const long allowed = 10000 + options_.max_integrator_steps * integrated_intervals_;
+    if (integrator_steps_ <= allowed) return "";
+    return "CVODES took " + std::to_string(integrator_steps_) + " steps for " +
+           std::to_string(integrated_intervals_) + " intervals, more than 10^4 + " +
+           std::to_string(options_.max_integrator_steps) +
+           " (max integrator steps) per interval: the noise or parameters of this trial point "
+           "make the model too hard to integrate";
+  }
+  // What a CV_TOO_MUCH_WORK failure means here: the bound on one interval.
+  std::string OneIntervalBoundNote(const char* what) const {
+    if (std::string(what).find("CV_TOO_MUCH_WORK") == std::string::npos) return "";
+    return " (more than 100 x " + std::to_string(options_.max_integrator_steps) +
+           " (max integrator steps) in one interval: the noise or parameters of this trial "
+           "point make the model too hard to integrate)";
+  }
+
   // CVODES tolerances of the likelihood (the spec's, if tighter).
   static constexpr double kCvodesRtol = 1e-10;
   static constexpr double kCvodesAtol = 1e-12;
@@ -253,6 +273,9 @@ class InnovationLikelihood {
   TransitionOptions cvodes_options_;
   mutable std::unique_ptr<Transition<Model>> cvodes_;
   mutable std::map<int, std::shared_ptr<void>> theta_flows_;  // by C
+  // CVODES steps and integrated intervals of the running evaluation, for
+  // the work bound (TunerOptions::max_integrator_steps).
+  mutable long integrator_steps_ = 0, integrated_intervals_ = 0;
 };
 
 // NLL(theta), quiet NaN when the filter fails.
@@ -325,6 +348,7 @@ template <class Model, class Meas>
 void InnovationLikelihood<Model, Meas>::SetUpCvodes(TransitionOptions o) {
   o.rtol = std::min(o.rtol, kCvodesRtol);
   o.atol = std::min(o.atol, kCvodesAtol);
+  o.max_steps = std::min(o.max_steps, 100 * options_.max_integrator_steps);  // one interval
   std::string error;
   if (!o.IsValid(&error)) throw InputError(error);
   cvodes_options_ = o;
@@ -377,6 +401,7 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
   const MeasCovT<T> R = r_.template Matrix<T>(theta_r, 0.0);
   StateCovT<T> Q = q_.template Matrix<T>(theta_q, dt_ref_);
   double q_dt = dt_ref_;
+  integrator_steps_ = integrated_intervals_ = 0;
   Belief<T> b;
   if (sigma_) {
     const Eigen::Index count = sigma_set_.unit_points.cols();
@@ -402,9 +427,10 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
         if (!Predict<T>(&b, t0, t1, u, Q, p, &reason))
           return fail(d, k, "prediction failed: " + reason);
       } catch (const NumericalError& e) {  // CVODES failed
-        if (why != nullptr) *why = e.what();
+        if (why != nullptr) *why = e.what() + OneIntervalBoundNote(e.what());
         return false;
       }
+      if (const std::string work = WorkBoundMessage(); !work.empty()) return fail(d, k, work);
       return true;
     };
     auto row = [&](size_t k, const Vec<double, kM>* z) {
@@ -433,11 +459,32 @@ InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, doub
   if constexpr (std::is_same_v<T, double>) {
     if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
       cvodes_->SetInput(u);
-      return F != nullptr ? cvodes_->StepWithJacobian(x, t0, t1, F) : cvodes_->Step(x, t0, t1);
+      const long before = cvodes_->stats().internal_steps;
+      ++integrated_intervals_;
+      try {
+        const StateT<T> x1 =
+            F != nullptr ? cvodes_->StepWithJacobian(x, t0, t1, F) : cvodes_->Step(x, t0, t1);
+        integrator_steps_ += cvodes_->stats().internal_steps - before;
+        return x1;
+      } catch (...) {
+        integrator_steps_ += cvodes_->stats().internal_steps - before;
+        throw;
+      }
     }
   } else if constexpr (!kDiscreteTime<Model>) {
-    if (cvodes_ != nullptr)  // the same with dx/dtheta, dF/dtheta (cvodes_theta_flow.h)
-      return ThetaFlow<JetSize<T>::value>().Propagate(x, t0, t1, u, p, F);
+    if (cvodes_ != nullptr) {  // the same with dx/dtheta, dF/dtheta (cvodes_theta_flow.h)
+      auto& flow = ThetaFlow<JetSize<T>::value>();
+      const long before = flow.steps();
+      ++integrated_intervals_;
+      try {
+        const StateT<T> x1 = flow.Propagate(x, t0, t1, u, p, F);
+        integrator_steps_ += flow.steps() - before;
+        return x1;
+      } catch (...) {
+        integrator_steps_ += flow.steps() - before;
+        throw;
+      }
+    }
   }
   const Integrator scheme = spec_.transition.integrator;
   const int substeps = spec_.transition.substeps;

@@ -78,6 +78,9 @@ bool TunerOptions::IsValid(std::string* error) const {
     return fail("start spread must be finite and >= 0, got " + FormatNumber(start_spread));
   if (!(bound_width > 0)) return fail("bound width must be > 0, got " + FormatNumber(bound_width));
   if (max_iterations < 1) return fail("max iterations must be >= 1");
+  if (max_integrator_steps < 1 || max_integrator_steps > 100000000)
+    return fail("max integrator steps must be in 1..1e8, got " +
+                std::to_string(max_integrator_steps));
   if (!(function_tolerance >= 0 && gradient_tolerance >= 0 && parameter_tolerance >= 0))
     return fail("tolerances must be >= 0");
   if (!(hessian_step > 0 && hessian_step < 1))

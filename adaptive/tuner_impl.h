@@ -699,6 +699,12 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
     }
     result.starts.back().theta_start = points[s];
     result.starts.back().scale_shift = shift;
+    if (!result.starts.back().ok && k > 0) {  // say why the filter failed there
+      double nll = 0.0;
+      std::string why;
+      if (!lik.Nll(from.data(), &nll, &why) && !why.empty())
+        result.starts.back().termination += " The filter at this start: " + why + ".";
+    }
     converged[s] = conv;
     const TuneStart& st = result.starts.back();
     if (st.ok && (result.best_start < 0 || st.nll_end < result.starts[result.best_start].nll_end))

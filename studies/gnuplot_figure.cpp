@@ -6,21 +6,9 @@
 #include <filesystem>
 
 #include "src/io/output_file.h"
+#include "src/io/shell.h"
 
 namespace estlab {
-namespace {
-
-// Runs a shell command, returns its exit status and output.
-int RunCommand(const std::string& command, std::string* output) {
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return -1;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) *output += buf;
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-}  // namespace
 
 std::string GnuplotFigure::Write(const std::string& png_terminal, int width, int height) const {
   WriteTextFile(folder_ + "/" + name_ + ".dat", dat_.str());
@@ -46,7 +34,7 @@ std::string GnuplotFigure::Write(const std::string& png_terminal, int width, int
 
 std::string PngTerminal(const std::string& gnuplot, std::string* message) {
   std::string terminals;
-  if (RunCommand(gnuplot + " -e 'set terminal'", &terminals) != 0) {
+  if (RunShell(gnuplot + " -e 'set terminal'", &terminals) != 0) {
     *message = "gnuplot ('" + gnuplot + "') did not run; the scripts are written";
     return "";
   }
@@ -57,7 +45,7 @@ bool RenderFigure(const std::string& script, const std::string& gnuplot, std::st
   const std::filesystem::path path(script);
   const std::string folder = path.parent_path().empty() ? "." : path.parent_path().string();
   std::string log;
-  const int status = RunCommand(
+  const int status = RunShell(
       "cd " + ShellQuote(folder) + " && " + gnuplot + " " + ShellQuote(path.filename().string()),
       &log);
   if (status == 0) return true;
@@ -90,10 +78,5 @@ std::string GnuplotQuote(const std::string& s) {
   return out + "'";
 }
 
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
 
 }  // namespace estlab

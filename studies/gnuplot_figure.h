@@ -77,9 +77,9 @@ void RenderFigures(const FiguresOptions& options, FiguresSummary* f);
 // (with *message set) when gnuplot does not run or rendering is off.
 std::string ScriptTerminal(const FiguresOptions& options, std::string* message);
 
-// 'text' quoted for a gnuplot string; "text" quoted for the shell.
+// 'text' quoted for a gnuplot string (ShellQuote, for the shell, is in
+// src/io/shell.h).
 std::string GnuplotQuote(const std::string& text);
-std::string ShellQuote(const std::string& text);
 
 }  // namespace estlab
 

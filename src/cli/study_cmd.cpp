@@ -20,6 +20,7 @@
 #include "studies/study_figures.h"
 #include "studies/study_results.h"
 #include "studies/study_runner.h"
+#include "studies/study_slurm.h"
 
 namespace po = boost::program_options;
 
@@ -41,6 +42,10 @@ Examples:
   estlab merge results/all r1 r2 r3
   estlab figures results/paper002
   estlab study studies/multiarm_hand_vs_auto.ini --out results/multiarm --jobs 2
+  # On a Slurm cluster: 10 array tasks and a merge job, then follow them:
+  estlab study studies/paper003_double_pendulum_sweep.ini --out results/p003 --slurm 10 \
+      --jobs 4 --slurm-opts "--partition=short --time=01:00:00"
+  estlab study --status results/p003
 
 Output folder: runs.csv (a row per scenario, run, filter and noise setting),
 summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
@@ -155,6 +160,104 @@ std::string SummaryJson(const std::string& dir, const StudyConfig& config,
   return j.str();
 }
 
+// `--slurm N`: the scripts, the submission (unless --slurm-dry-run), and how
+// to follow it.
+int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
+                  const StudyRunOptions& run, bool json) {
+  if (vm.count("shard")) throw InputError("--slurm makes the shards itself; leave out --shard");
+  SlurmOptions o;
+  o.shards = vm["slurm"].as<int>();
+  o.cpus_per_task = run.jobs;
+  o.sbatch_opts = vm["slurm-opts"].as<std::string>();
+  o.estlab = std::filesystem::canonical("/proc/self/exe").string();
+  o.config_path = std::filesystem::absolute(config.path).lexically_normal().string();
+  o.dry_run = vm.count("slurm-dry-run") > 0;
+  SlurmPlan plan = PlanSlurm(config, run.out_dir, o);
+  if (!o.dry_run) SubmitSlurm(&plan);
+  const std::string shards = [&] {
+    std::string s;
+    for (int k : plan.pending_shards) {
+      if (!s.empty()) s += ',';
+      s += std::to_string(k);
+    }
+    return s;
+  }();
+  if (json) {
+    JsonWriter j;
+    j.BeginObject().Key("out").Value(plan.out).Key("folder").Value(plan.folder);
+    j.Key("merged").Value(plan.merged).Key("dry_run").Value(o.dry_run);
+    j.Key("pending_shards").BeginArray();
+    for (int k : plan.pending_shards) j.Value(k);
+    j.EndArray().Key("array_job").Value(plan.array_job).Key("merge_job").Value(plan.merge_job);
+    j.Key("commands").BeginArray();
+    for (const auto& c : plan.commands) j.Value(c);
+    j.EndArray().EndObject();
+    std::cout << j.str() << "\n";
+    return 0;
+  }
+  if (plan.merged) {
+    std::cout << run.out_dir << " holds the merged study already; nothing to submit\n";
+    return 0;
+  }
+  if (o.dry_run) {
+    std::cout << "wrote " << plan.array_script << " and " << plan.merge_script
+              << "; submit with:\n";
+    for (const auto& c : plan.commands)
+      std::cout << "  " << (c.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
+                                ? "ARRAY=$(" + c + ")"
+                                : c)
+                << "\n";
+    return 0;
+  }
+  if (!plan.array_job.empty())
+    std::cout << "submitted shard(s) " << shards << " of " << o.shards << " as array job "
+              << plan.array_job << " (" << plan.array_script << ")\n";
+  else
+    std::cout << "every shard is complete; no array job\n";
+  std::cout << "merge job " << plan.merge_job << " writes " << plan.out
+            << (plan.array_job.empty() ? "" : " after it (afterok)") << "\n"
+            << "follow with:\n  squeue -j "
+            << (plan.array_job.empty() ? "" : plan.array_job + ",") << plan.merge_job
+            << "\n  sacct -j " << (plan.array_job.empty() ? "" : plan.array_job + ",")
+            << plan.merge_job << "    (where accounting is on)\n  estlab study --status "
+            << run.out_dir << "\nlogs in " << plan.folder << "/logs/; the same command again "
+            << "resubmits only unfinished shards\n";
+  return 0;
+}
+
+// `--status DIR`.
+int PrintStatus(const std::string& dir, bool json) {
+  const StudyStatus st = ReadStudyStatus(dir);
+  if (json) {
+    JsonWriter j;
+    j.BeginObject().Key("dir").Value(dir).Key("status").Value(st.status);
+    j.Key("finished_runs").Value(st.finished_runs).Key("total_runs").Value(st.total_runs);
+    j.Key("complete_shards").Value(st.complete_shards).Key("shards").BeginArray();
+    for (const auto& s : st.shards) {
+      j.BeginObject().Key("shard").Value(s.shard).Key("status").Value(s.status);
+      j.Key("finished_runs").Value(s.finished_runs).Key("total_runs").Value(s.total_runs);
+      j.EndObject();
+    }
+    j.EndArray().Key("last_submission").Value(st.last_jobs).EndObject();
+    std::cout << j.str() << "\n";
+    return 0;
+  }
+  std::cout << dir << ": " << st.status;
+  if (st.status != "not started")
+    std::cout << ", " << st.finished_runs << "/" << st.total_runs << " runs";
+  std::cout << "\n";
+  if (!st.shards.empty()) {
+    std::cout << st.complete_shards << " of " << st.shards.size() << " shards complete\n"
+              << "  shard  status        runs\n";
+    for (const auto& s : st.shards)
+      std::cout << "  " << std::left << std::setw(5) << s.shard << "  " << std::setw(12)
+                << s.status << "  " << s.finished_runs << "/" << s.total_runs << "\n"
+                << std::right;
+    if (!st.last_jobs.empty()) std::cout << "last submission: " << st.last_jobs << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int RunStudyCommand(const std::vector<std::string>& args) {
@@ -168,7 +271,15 @@ int RunStudyCommand(const std::vector<std::string>& args) {
       "jobs", po::value<int>(), "worker threads (overrides [study] jobs)")(
       "shard", po::value<std::string>(), "k/N: only runs i with i % N == k-1")(
       "quiet", "no progress output")("json", "print a JSON summary on stdout")(
-      "force", "resume with fewer --runs than the folder holds (the others are dropped)");
+      "force", "resume with fewer --runs than the folder holds (the others are dropped)")(
+      "slurm", po::value<int>(),
+      "N: submit the study as a Slurm job array of N shards plus a merge job into --out "
+      "(scripts, shard folders and logs in OUT.slurm/); again: only unfinished shards")(
+      "slurm-opts", po::value<std::string>()->default_value(""),
+      "extra sbatch options for both jobs, e.g. \"--partition=short --time=01:00:00\"")(
+      "slurm-dry-run", "with --slurm: write the scripts and print the sbatch commands")(
+      "status", po::value<std::string>(),
+      "DIR: how far the study in DIR (or its --slurm shards) is; no CONFIG needed");
   po::positional_options_description pos;
   pos.add("config", 1);
   po::variables_map vm;
@@ -178,6 +289,7 @@ int RunStudyCommand(const std::vector<std::string>& args) {
     std::cout << desc << kStudyHelp;
     return 0;
   }
+  if (vm.count("status")) return PrintStatus(vm["status"].as<std::string>(), vm.count("json") > 0);
   if (!vm.count("config"))
     throw InputError("a study file is required: estlab study CONFIG --out DIR");
   if (!vm.count("out")) throw InputError("--out is required");
@@ -197,6 +309,9 @@ int RunStudyCommand(const std::vector<std::string>& args) {
   const bool json = vm.count("json") > 0;
 
   const StudyConfig config = LoadStudyConfig(vm["config"].as<std::string>());
+  if (vm.count("slurm")) return SubmitToSlurm(vm, config, options, json);
+  if (vm.count("slurm-dry-run") || !vm["slurm-opts"].defaulted())
+    throw InputError("--slurm-dry-run and --slurm-opts go with --slurm N");
   StopSignals signals;
   options.stop = &g_stop_signal;
   const StudyRunSummary sum = RunStudy(config, options);
@@ -225,7 +340,13 @@ int RunStudyCommand(const std::vector<std::string>& args) {
 int RunMerge(const std::vector<std::string>& args) {
   if (args.empty() || args[0] == "--help" || args[0] == "-h") {
     std::cout << "estlab merge OUT SHARD_DIR...: join the folders of 'estlab study --shard k/N'\n"
-                 "into OUT (new or empty). The result equals one unsharded run.\n";
+                 "into OUT (new or empty). The result equals one unsharded run.\n"
+                 "Every shard is checked first: complete, of the same study, its files\n"
+                 "unchanged since it finished (size and checksum in its study.state), its\n"
+                 "runs exactly its shard's and whole; a refusal names the shard and the\n"
+                 "problem (exit 2). OUT is built in a temporary folder beside it and\n"
+                 "renamed into place: it is complete or absent.\n\n"
+                 "Example:\n  estlab merge results/all r1 r2 r3\n";
     return args.empty() ? 2 : 0;
   }
   if (args.size() < 2) throw InputError("merge: give OUT and at least one shard folder");

@@ -513,6 +513,9 @@ int RunTune(const std::vector<std::string>& args) {
       "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
       "max-iterations", po::value<int>(),
       "Ceres iterations per start (default 200), EM iterations (default 1000)")(
+      "max-integrator-steps", po::value<long>()->default_value(200),
+      "--integrator cvodes: CVODES steps per interval allowed at a trial point, on average "
+      "(+10^4), 100x in one interval; a point needing more is infeasible")(
       "estimate-param", po::value<std::string>(),
       "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
       "param-bounds", po::value<std::string>(),
@@ -609,6 +612,7 @@ int RunTune(const std::vector<std::string>& args) {
   } else if (!vm["lags"].defaulted()) {
     throw InputError("--lags applies to --estimator als");
   }
+  options.max_integrator_steps = vm["max-integrator-steps"].as<long>();
   options.max_iterations = vm.count("max-iterations") ? vm["max-iterations"].as<int>()
                            : estimator == "em"        ? 1000
                                                       : 200;

@@ -37,6 +37,15 @@ FolderLock::~FolderLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
+bool FolderLockHeld(const std::string& folder) {
+  const std::string path = folder + "/" + FolderLock::kFileName;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;  // never locked
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0;
+  ::close(fd);  // releases the probe's lock
+  return held;
+}
+
 bool FolderIsEmptyButLock(const std::string& folder) {
   for (const auto& entry : std::filesystem::directory_iterator(folder))
     if (entry.path().filename() != FolderLock::kFileName) return false;

@@ -32,6 +32,9 @@ class FolderLock {
   int fd_ = -1;
 };
 
+// True when a process holds the lock of `folder` now (probed, not taken).
+bool FolderLockHeld(const std::string& folder);
+
 // True when `folder` holds nothing but (possibly) the lock file.
 bool FolderIsEmptyButLock(const std::string& folder);
 

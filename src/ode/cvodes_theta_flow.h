@@ -95,6 +95,9 @@ class CvodesThetaFlow {
   CvodesThetaFlow(const CvodesThetaFlow&) = delete;
   CvodesThetaFlow& operator=(const CvodesThetaFlow&) = delete;
 
+  // CVODES internal steps taken by every Propagate so far.
+  long steps() const { return steps_; }
+
   // x(t1) from x(t0) = x under constant input u and parameters p (Params, or
   // ParamsT<J> when physical parameters are differentiated); F = dx(t1)/dx(t0)
   // when F is not null.
@@ -122,6 +125,8 @@ class CvodesThetaFlow {
     callback_error_.clear();
     sunrealtype t_reached = t0;
     const int flag = CVode(m.mem, t1, m.y, &t_reached, CV_NORMAL);
+    long steps = 0;  // since the ReInit above
+    if (CVodeGetNumSteps(m.mem, &steps) == CV_SUCCESS) steps_ += steps;
     if (flag < 0) Fail(flag, t0, t1, t_reached);
     Check(CVodeGetSens(m.mem, &t_reached, m.yS), "CVodeGetSens");
     StateJ x1;
@@ -308,6 +313,7 @@ class CvodesThetaFlow {
   }
 
   TransitionOptions options_;
+  long steps_ = 0;
   bool use_bdf_ = false;
   SUNContext ctx_ = nullptr;
   std::array<Memory, 2> memory_;  // [0]: z = x, [1]: z = [x; vec S]
