@@ -153,20 +153,28 @@ class InnovationLikelihood {
   // (TunerOptions::max_integrator_steps), else why this trial point is
   // infeasible.
   std::string WorkBoundMessage() const {
-    const long allowed = 10000 + options_.max_integrator_steps * integrated_intervals_;
+    const long allowed = 10000 + StepsPerInterval() * integrated_intervals_;
     if (integrator_steps_ <= allowed) return "";
     return "CVODES took " + std::to_string(integrator_steps_) + " steps for " +
            std::to_string(integrated_intervals_) + " intervals, more than 10^4 + " +
-           std::to_string(options_.max_integrator_steps) +
-           " (max integrator steps) per interval: the noise or parameters of this trial point "
-           "make the model too hard to integrate";
+           std::to_string(StepsPerInterval()) + " (max integrator steps" +
+           (Model::kStiff ? " x 5, a stiff model" : "") +
+           ") per interval: the noise or parameters of this trial point make the model too hard "
+           "to integrate";
+  }
+  // The average bound per interval: TunerOptions::max_integrator_steps, five
+  // times that for a stiff model.
+  long StepsPerInterval() const {
+    return options_.max_integrator_steps * (Model::kStiff ? 5 : 1);
   }
   // What a CV_TOO_MUCH_WORK failure means here: the bound on one interval.
   std::string OneIntervalBoundNote(const char* what) const {
     if (std::string(what).find("CV_TOO_MUCH_WORK") == std::string::npos) return "";
-    return " (more than 100 x " + std::to_string(options_.max_integrator_steps) +
-           " (max integrator steps) in one interval: the noise or parameters of this trial "
-           "point make the model too hard to integrate)";
+    return " (more than 100 x " + std::to_string(StepsPerInterval()) +
+           " steps in one interval (max integrator steps" +
+           (Model::kStiff ? " x 5, a stiff model" : "") +
+           "): the noise or parameters of this trial point make the model too hard to "
+           "integrate)";
   }
 
   // CVODES tolerances of the likelihood (the spec's, if tighter).
@@ -348,7 +356,7 @@ template <class Model, class Meas>
 void InnovationLikelihood<Model, Meas>::SetUpCvodes(TransitionOptions o) {
   o.rtol = std::min(o.rtol, kCvodesRtol);
   o.atol = std::min(o.atol, kCvodesAtol);
-  o.max_steps = std::min(o.max_steps, 100 * options_.max_integrator_steps);  // one interval
+  o.max_steps = std::min(o.max_steps, 100 * StepsPerInterval());  // one interval
   std::string error;
   if (!o.IsValid(&error)) throw InputError(error);
   cvodes_options_ = o;

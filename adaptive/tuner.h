@@ -124,10 +124,11 @@ struct TunerOptions {
   int max_iterations = 200;
   // CVODES work per trial point (--integrator cvodes): on average at most
   // this many internal steps per integrated interval over the evaluation
-  // (plus 10^4 steps of slack), and 100 times this in any one interval. A
-  // trial point that needs more (absurd noise values can make the filter's
-  // state race) is infeasible, like a failing filter: the optimiser steps
-  // back; a start that needs more fails, saying so.
+  // (plus 10^4 steps of slack; five times as many for a stiff model, whose
+  // BDF restarts at every interval take more), and 100 times that in any
+  // one interval. A trial point that needs more (absurd noise values can
+  // make the filter's state race) is infeasible, like a failing filter: the
+  // optimiser steps back; a start that needs more fails, saying so.
   long max_integrator_steps = 200;
   double function_tolerance = 1e-12;  // relative change of the NLL
   double gradient_tolerance = 1e-8;   // max-norm of the gradient (L-BFGS)

@@ -78,5 +78,4 @@ std::string GnuplotQuote(const std::string& s) {
   return out + "'";
 }
 
-
 }  // namespace estlab

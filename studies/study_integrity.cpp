@@ -67,10 +67,10 @@ class Coverage {
     if (cb == c.combo.end()) return Foreign(file, r, "a filter x noise setting it does not have");
     char* end = nullptr;
     const long run = std::strtol(r[3].c_str(), &end, 10);
-    if (r[3].empty() || *end != '\0' || run < 0 || run >= c.runs ||
-        run % shards_ != shard_ - 1)
-      return Foreign(file, r, "a run this folder's shard " + std::to_string(shard_) + "/" +
-                                  std::to_string(shards_) + " does not have");
+    if (r[3].empty() || *end != '\0' || run < 0 || run >= c.runs || run % shards_ != shard_ - 1)
+      return Foreign(file, r,
+                     "a run this folder's shard " + std::to_string(shard_) + "/" +
+                         std::to_string(shards_) + " does not have");
     *out = &c;
     return run * c.combos + cb->second;
   }
@@ -108,8 +108,8 @@ class Coverage {
     }
     if (result->damaged > long(kMaxProblemsPerKind))
       result->damage.push_back("... and " +
-                                 std::to_string(result->damaged - long(kMaxProblemsPerKind)) +
-                                 " more damaged runs");
+                               std::to_string(result->damaged - long(kMaxProblemsPerKind)) +
+                               " more damaged runs");
     result->foreign = foreign_problems_;
     if (foreign_ > long(kMaxProblemsPerKind))
       result->foreign.push_back("... and " + std::to_string(foreign_ - long(kMaxProblemsPerKind)) +
@@ -117,8 +117,7 @@ class Coverage {
   }
 
  private:
-  long Foreign(const std::string& file, const std::vector<std::string>& r,
-               const std::string& why) {
+  long Foreign(const std::string& file, const std::vector<std::string>& r, const std::string& why) {
     if (foreign_++ < long(kMaxProblemsPerKind))
       foreign_problems_.push_back(file + " has a row of " + r[0] + "/" + r[1] + "/" + r[2] +
                                   " run " + r[3] + ", " + why);
@@ -134,12 +133,12 @@ class Coverage {
 
 }  // namespace
 
-RunCoverage CheckRunCoverage(const StudyConfig& config, const std::string& dir, int runs,
-                             int shard, int shards) {
+RunCoverage CheckRunCoverage(const StudyConfig& config, const std::string& dir, int runs, int shard,
+                             int shards) {
   Coverage coverage(config, runs, shard, shards);
   const std::vector<std::string> runs_cols = RunsColumns(config);
-  const size_t steps_col = size_t(std::find(runs_cols.begin(), runs_cols.end(), "steps") -
-                                  runs_cols.begin());
+  const size_t steps_col =
+      size_t(std::find(runs_cols.begin(), runs_cols.end(), "steps") - runs_cols.begin());
   bool dropped = false;
   ScenarioCounts* c = nullptr;
   ForEachRow(dir + "/runs.csv", runs_cols, &dropped, [&](const std::vector<std::string>& r) {
@@ -201,8 +200,8 @@ std::string CompareDigests(const std::string& dir, const std::vector<FileDigest>
     if (!fs::is_regular_file(fs::path(dir) / f.path)) return f.path + " is missing";
     const FileDigest now = Digest(dir, f.path);
     if (now.bytes != f.bytes)
-      return f.path + " has " + std::to_string(now.bytes) + " bytes, " +
-             std::to_string(f.bytes) + " when the study finished (cut off or changed)";
+      return f.path + " has " + std::to_string(now.bytes) + " bytes, " + std::to_string(f.bytes) +
+             " when the study finished (cut off or changed)";
     if (now.fnv != f.fnv)
       return f.path + " changed after the study finished (checksum " + HashHex(now.fnv) +
              ", then " + HashHex(f.fnv) + ")";

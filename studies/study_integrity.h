@@ -52,8 +52,8 @@ struct RunCoverage {
 // with the number of runs, not rows) for the runs 0..runs-1 of every
 // scenario with run % shards == shard - 1. A run interrupted before its
 // runs.csv rows were all written is simply not complete (no problem).
-RunCoverage CheckRunCoverage(const StudyConfig& config, const std::string& dir, int runs,
-                             int shard, int shards);
+RunCoverage CheckRunCoverage(const StudyConfig& config, const std::string& dir, int runs, int shard,
+                             int shards);
 
 // Checksums of DIR's result files: config.ini, runs.csv, steps.csv,
 // timing.csv, tuned.csv and timeseries/..., those that exist, by path.

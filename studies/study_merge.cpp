@@ -68,9 +68,10 @@ std::vector<StudyState> ReadShardStates(const std::vector<std::string>& dirs) {
 void CheckShard(const StudyConfig& config, const std::string& dir, const StudyState& s) {
   const std::string name = "merge: " + ShardName(dir, s);
   if (s.files.empty())
-    throw InputError(name + ": no checksums (finished by an older estlab): run its study "
-                            "command again (estlab study CONFIG --out " + dir + " --shard " +
-                     std::to_string(s.shard) + "/" + std::to_string(s.shards) +
+    throw InputError(name +
+                     ": no checksums (finished by an older estlab): run its study "
+                     "command again (estlab study CONFIG --out " +
+                     dir + " --shard " + std::to_string(s.shard) + "/" + std::to_string(s.shards) +
                      ") to record them");
   const std::string changed = CompareDigests(dir, s.files);
   if (!changed.empty())
@@ -87,7 +88,8 @@ void CheckShard(const StudyConfig& config, const std::string& dir, const StudySt
 
 // Writes the merged study into `dir` (an empty folder).
 void WriteMerged(const std::string& dir, const StudyConfig& config, const std::string& config_text,
-                 const std::vector<std::string>& shard_dirs, const std::vector<StudyState>& states) {
+                 const std::vector<std::string>& shard_dirs,
+                 const std::vector<StudyState>& states) {
   std::vector<std::vector<std::string>> runs, steps, timing;
   double wall = 0.0;
   for (size_t i = 0; i < shard_dirs.size(); ++i) {

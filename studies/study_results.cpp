@@ -265,8 +265,8 @@ bool ReadStudyState(const std::string& dir, StudyState* s) {
     for (const std::string& f : files) {  // "BYTES FNV PATH"
       const size_t a = f.find(' '), b = f.find(' ', a + 1);
       if (a == std::string::npos || b == std::string::npos) throw InputError("file line");
-      s->files.push_back(
-          {f.substr(b + 1), std::stoull(f.substr(0, a)), std::stoull(f.substr(a + 1, b - a - 1), nullptr, 16)});
+      s->files.push_back({f.substr(b + 1), std::stoull(f.substr(0, a)),
+                          std::stoull(f.substr(a + 1, b - a - 1), nullptr, 16)});
     }
   } catch (const std::exception&) {
     throw InputError(path + ": damaged study state file");

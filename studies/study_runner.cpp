@@ -65,15 +65,6 @@ std::string HexHash(uint64_t h) {
   return buf;
 }
 
-std::string NowUtc() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 // The text one run adds to each file, formatted by the worker.
 struct RunText {
   std::string runs, steps, timing;
@@ -97,6 +88,15 @@ uint64_t ComboSeed(uint64_t run_seed, const std::string& filter, const std::stri
 
 namespace study_runner {
 
+std::string NowUtc() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
 std::string Sig10(double v) {
   if (std::isnan(v)) return "";
   char buf[32];
@@ -118,7 +118,6 @@ std::vector<double> SampleX0(const ScenarioConfig& sc, uint64_t run_seed) {
   for (int i = 0; i < n; ++i) x0[i] += d(i);
   return x0;
 }
-
 
 // The measurements (and truth) of a simulated trajectory, as a filter reads
 // them. With meas-noise = poisson the simulator drew no measurement noise and
@@ -148,6 +147,7 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
 namespace {
 
 using study_runner::DataFromTruth;
+using study_runner::NowUtc;
 using study_runner::SampleX0;
 using study_runner::Sig10;
 
@@ -195,7 +195,6 @@ void WriteTimeseries(const RunContext& ctx, const ScenarioConfig& sc, int run,
   }
   file.Commit();
 }
-
 
 // The runs.csv fields of the metrics that need no truth (study_metrics.h):
 // nll_per_step, nis_lo95, nis_hi95, pred_rmse_OUTPUT for every output column

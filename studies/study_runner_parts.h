@@ -13,6 +13,9 @@
 
 namespace estlab::study_runner {
 
+// The time now as 2026-12-03T14:19:43Z.
+std::string NowUtc();
+
 // "%.10g"; "" for NaN.
 std::string Sig10(double v);
 

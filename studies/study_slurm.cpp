@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -12,6 +11,7 @@
 #include "src/io/output_file.h"
 #include "src/io/shell.h"
 #include "studies/study_results.h"
+#include "studies/study_runner_parts.h"
 
 namespace fs = std::filesystem;
 
@@ -20,8 +20,7 @@ namespace estlab {
 bool SlurmOptions::IsValid(std::string* error) const {
   if (shards < 1 || shards > 100000)
     return *error = "--slurm: the number of shards must be in 1..100000", false;
-  if (cpus_per_task < 0 || cpus_per_task > 1024)
-    return *error = "--jobs must be in 1..1024", false;
+  if (cpus_per_task < 0 || cpus_per_task > 1024) return *error = "--jobs must be in 1..1024", false;
   if (estlab.empty() || !fs::path(estlab).is_absolute())
     return *error = "the estlab binary's path must be absolute", false;
   if (config_path.empty()) return *error = "no study file", false;
@@ -31,6 +30,8 @@ bool SlurmOptions::IsValid(std::string* error) const {
 }
 
 namespace {
+
+using study_runner::NowUtc;
 
 std::string SlurmFolder(const std::string& out) {
   fs::path p = fs::absolute(out).lexically_normal();
@@ -44,15 +45,6 @@ std::string AbsoluteOut(const std::string& out) {
   return p.string();
 }
 
-std::string NowUtc() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
 // "1,3,4" for sbatch --array.
 std::string ArraySpec(const std::vector<int>& shards) {
   std::string out;
@@ -63,8 +55,7 @@ std::string ArraySpec(const std::vector<int>& shards) {
   return out;
 }
 
-std::string ArrayScript(const StudyConfig& config, const SlurmPlan& plan,
-                        const SlurmOptions& o) {
+std::string ArrayScript(const StudyConfig& config, const SlurmPlan& plan, const SlurmOptions& o) {
   const int cpus = o.cpus_per_task > 0 ? o.cpus_per_task : config.study.jobs;
   std::ostringstream s;
   s << "#!/bin/bash\n"
@@ -82,8 +73,7 @@ std::string ArrayScript(const StudyConfig& config, const SlurmPlan& plan,
   return s.str();
 }
 
-std::string MergeScript(const StudyConfig& config, const SlurmPlan& plan,
-                        const SlurmOptions& o) {
+std::string MergeScript(const StudyConfig& config, const SlurmPlan& plan, const SlurmOptions& o) {
   std::ostringstream s;
   s << "#!/bin/bash\n"
     << "# Written by: estlab study " << ShellQuote(o.config_path) << " --out "
@@ -139,8 +129,8 @@ SlurmPlan PlanSlurm(const StudyConfig& config, const std::string& out, const Slu
     if (state != "not started" && s.shards != o.shards)
       throw InputError("'" + SlurmShardDir(out, k) + "' holds shard " + std::to_string(s.shard) +
                        "/" + std::to_string(s.shards) + ", not of " + std::to_string(o.shards) +
-                       " shards; submit with --slurm " + std::to_string(s.shards) +
-                       " or delete '" + plan.folder + "'");
+                       " shards; submit with --slurm " + std::to_string(s.shards) + " or delete '" +
+                       plan.folder + "'");
     if (state == "running")
       throw InputError("'" + SlurmShardDir(out, k) +
                        "' is running (its lock is held); wait for it, or scancel its job");
@@ -159,8 +149,9 @@ SlurmPlan PlanSlurm(const StudyConfig& config, const std::string& out, const Slu
                             " " + ShellQuote(plan.array_script));
   plan.commands.push_back(
       "sbatch --parsable" +
-      std::string(plan.pending_shards.empty() ? ""
-                                              : " --dependency=afterok:$ARRAY --kill-on-invalid-dep=yes") +
+      std::string(plan.pending_shards.empty()
+                      ? ""
+                      : " --dependency=afterok:$ARRAY --kill-on-invalid-dep=yes") +
       extra + " " + ShellQuote(plan.merge_script));
   return plan;
 }
@@ -173,8 +164,8 @@ std::string Sbatch(const std::string& command) {
   const int status = RunShell(command, &output);
   std::string id = output.substr(0, output.find_first_of(";\n"));
   if (status != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
-    throw InputError("sbatch failed (exit " + std::to_string(status) + "): " +
-                     (output.empty() ? "no output" : output) + "\n  command: " + command);
+    throw InputError("sbatch failed (exit " + std::to_string(status) +
+                     "): " + (output.empty() ? "no output" : output) + "\n  command: " + command);
   return id;
 }
 
@@ -189,9 +180,9 @@ void SubmitSlurm(SlurmPlan* plan) {
   if (at != std::string::npos) merge.replace(at, 6, plan->array_job);
   plan->merge_job = Sbatch(merge);
   std::ofstream jobs(plan->folder + "/jobs.txt", std::ios::app);
-  jobs << NowUtc() << " array " << (plan->array_job.empty() ? "-" : plan->array_job)
-       << " shards " << (plan->pending_shards.empty() ? "-" : ArraySpec(plan->pending_shards))
-       << " merge " << plan->merge_job << "\n";
+  jobs << NowUtc() << " array " << (plan->array_job.empty() ? "-" : plan->array_job) << " shards "
+       << (plan->pending_shards.empty() ? "-" : ArraySpec(plan->pending_shards)) << " merge "
+       << plan->merge_job << "\n";
   if (!jobs) throw InputError("cannot write '" + plan->folder + "/jobs.txt'");
 }
 
@@ -209,8 +200,8 @@ StudyStatus ReadStudyStatus(const std::string& dir) {
     throw InputError("'" + dir + "' is not a study results folder (no study.state), and '" +
                      folder + "' holds no --slurm submission");
   const StudyConfig config = ParseStudyConfig(
-      config_text, !config_path.empty() && fs::exists(config_path) ? config_path
-                                                                    : folder + "/config.ini");
+      config_text,
+      !config_path.empty() && fs::exists(config_path) ? config_path : folder + "/config.ini");
   auto runs_of = [&](int runs, int shard, int shards) {
     long n = 0;
     for (const auto& sc : config.scenarios)
@@ -233,10 +224,12 @@ StudyStatus ReadStudyStatus(const std::string& dir) {
     StudyState ss;
     s.status = ShardState(SlurmShardDir(dir, k), &ss);
     s.total_runs = runs_of(s.status == "not started" ? config.study.runs : ss.runs, k, shards);
-    if (s.status != "not started") s.finished_runs = CountFinishedRuns(config, SlurmShardDir(dir, k));
+    if (s.status != "not started")
+      s.finished_runs = CountFinishedRuns(config, SlurmShardDir(dir, k));
     st.complete_shards += s.status == "complete";
     st.shards.push_back(s);
   }
+  if (st.status == "not started" && !st.shards.empty()) st.status = "not merged";
   std::istringstream jobs(ReadWholeFile(folder + "/jobs.txt"));
   for (std::string line; std::getline(jobs, line);)
     if (!line.empty()) st.last_jobs = line;

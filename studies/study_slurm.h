@@ -29,12 +29,12 @@
 namespace estlab {
 
 struct SlurmOptions {
-  int shards = 1;            // array tasks
-  int cpus_per_task = 0;     // 0 = the config's jobs
-  std::string sbatch_opts;   // extra sbatch options, verbatim (--partition=... --time=...)
-  std::string estlab;        // absolute path of the estlab binary the jobs run
-  std::string config_path;   // the study file (made absolute)
-  bool dry_run = false;      // write the scripts, submit nothing
+  int shards = 1;           // array tasks
+  int cpus_per_task = 0;    // 0 = the config's jobs
+  std::string sbatch_opts;  // extra sbatch options, verbatim (--partition=... --time=...)
+  std::string estlab;       // absolute path of the estlab binary the jobs run
+  std::string config_path;  // the study file (made absolute)
+  bool dry_run = false;     // write the scripts, submit nothing
 
   bool IsValid(std::string* error) const;
 };
@@ -70,7 +70,9 @@ struct ShardStatus {
 };
 struct StudyStatus {
   std::string dir;
-  std::string status;  // complete | running | interrupted | not started
+  // complete | running | interrupted | not started; a --slurm submission
+  // whose merge has not written DIR yet: not merged.
+  std::string status;
   long finished_runs = 0, total_runs = 0;
   std::vector<ShardStatus> shards;  // empty when DIR was not submitted with --slurm
   int complete_shards = 0;

@@ -204,8 +204,7 @@ class TuningProgress {
       line << "start " << p.start << "/" << p.starts;
     else
       line << p.phase;
-    line << " iteration " << p.iteration << " " << p.objective << " " << Sig10(p.value)
-         << "\x1b[K";
+    line << " iteration " << p.iteration << " " << p.objective << " " << Sig10(p.value) << "\x1b[K";
     std::cerr << line.str() << std::flush;
   }
 
@@ -216,9 +215,8 @@ class TuningProgress {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.1f s", wall_s);
     if (tty_)
-      std::cerr << "\rtuning Q/R: " << done_ << "/" << total_ << " done  " << label << " "
-                << status << " in " << buf << "\x1b[K" << (done_ == total_ ? "\n" : "")
-                << std::flush;
+      std::cerr << "\rtuning Q/R: " << done_ << "/" << total_ << " done  " << label << " " << status
+                << " in " << buf << "\x1b[K" << (done_ == total_ ? "\n" : "") << std::flush;
     else
       std::cerr << "estlab study: tuned " << done_ << "/" << total_ << ": " << label << " "
                 << status << " in " << buf << "\n";
@@ -293,8 +291,8 @@ StudyTuningSummary TuneStudyNoise(StudyConfig* config, const StudyTuningOptions&
     for (size_t c = 0; c < config->scenarios[s].combos.size(); ++c) {
       const Combo& cb = config->scenarios[s].combos[c];
       if (cb.tune)
-        keys.push_back({int(s), int(c), config->scenarios[s].name,
-                        config->filters[cb.filter].name, config->noises[cb.noise].name});
+        keys.push_back({int(s), int(c), config->scenarios[s].name, config->filters[cb.filter].name,
+                        config->noises[cb.noise].name});
     }
   summary.total = int(keys.size());
   if (keys.empty()) return summary;
@@ -318,7 +316,8 @@ StudyTuningSummary TuneStudyNoise(StudyConfig* config, const StudyTuningOptions&
   std::atomic<size_t> next{0};
   std::exception_ptr error;
   auto work = [&] {
-    for (size_t i; !(options.stop && options.stop->load()) && (i = next.fetch_add(1)) < todo.size();) {
+    for (size_t i;
+         !(options.stop && options.stop->load()) && (i = next.fetch_add(1)) < todo.size();) {
       const ComboKey& key = keys[todo[i]];
       const auto t0 = std::chrono::steady_clock::now();
       try {

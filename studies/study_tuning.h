@@ -38,10 +38,10 @@ struct StudyTuningOptions {
 };
 
 struct StudyTuningSummary {
-  std::string csv;   // tuned.csv text; "" when no noise setting is tuned
-  int total = 0;     // scenario x filter x noise combinations to tune
-  int reused = 0;    // found in DIR/tuning/
-  int tuned = 0;     // tuned now
+  std::string csv;  // tuned.csv text; "" when no noise setting is tuned
+  int total = 0;    // scenario x filter x noise combinations to tune
+  int reused = 0;   // found in DIR/tuning/
+  int tuned = 0;    // tuned now
   bool interrupted = false;
 };
 

@@ -203,9 +203,10 @@ int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
     std::cout << "wrote " << plan.array_script << " and " << plan.merge_script
               << "; submit with:\n";
     for (const auto& c : plan.commands)
-      std::cout << "  " << (c.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
-                                ? "ARRAY=$(" + c + ")"
-                                : c)
+      std::cout << "  "
+                << (c.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
+                        ? "ARRAY=$(" + c + ")"
+                        : c)
                 << "\n";
     return 0;
   }
@@ -216,11 +217,11 @@ int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
     std::cout << "every shard is complete; no array job\n";
   std::cout << "merge job " << plan.merge_job << " writes " << plan.out
             << (plan.array_job.empty() ? "" : " after it (afterok)") << "\n"
-            << "follow with:\n  squeue -j "
+            << "follow with:\n  squeue -j " << (plan.array_job.empty() ? "" : plan.array_job + ",")
+            << plan.merge_job << "\n  sacct -j "
             << (plan.array_job.empty() ? "" : plan.array_job + ",") << plan.merge_job
-            << "\n  sacct -j " << (plan.array_job.empty() ? "" : plan.array_job + ",")
-            << plan.merge_job << "    (where accounting is on)\n  estlab study --status "
-            << run.out_dir << "\nlogs in " << plan.folder << "/logs/; the same command again "
+            << "    (where accounting is on)\n  estlab study --status " << run.out_dir
+            << "\nlogs in " << plan.folder << "/logs/; the same command again "
             << "resubmits only unfinished shards\n";
   return 0;
 }
@@ -250,8 +251,8 @@ int PrintStatus(const std::string& dir, bool json) {
     std::cout << st.complete_shards << " of " << st.shards.size() << " shards complete\n"
               << "  shard  status        runs\n";
     for (const auto& s : st.shards)
-      std::cout << "  " << std::left << std::setw(5) << s.shard << "  " << std::setw(12)
-                << s.status << "  " << s.finished_runs << "/" << s.total_runs << "\n"
+      std::cout << "  " << std::left << std::setw(5) << s.shard << "  " << std::setw(12) << s.status
+                << "  " << s.finished_runs << "/" << s.total_runs << "\n"
                 << std::right;
     if (!st.last_jobs.empty()) std::cout << "last submission: " << st.last_jobs << "\n";
   }

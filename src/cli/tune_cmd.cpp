@@ -515,7 +515,8 @@ int RunTune(const std::vector<std::string>& args) {
       "Ceres iterations per start (default 200), EM iterations (default 1000)")(
       "max-integrator-steps", po::value<long>()->default_value(200),
       "--integrator cvodes: CVODES steps per interval allowed at a trial point, on average "
-      "(+10^4), 100x in one interval; a point needing more is infeasible")(
+      "(+10^4; x5 for a stiff model), 100x in one interval; a point needing more is "
+      "infeasible")(
       "estimate-param", po::value<std::string>(),
       "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
       "param-bounds", po::value<std::string>(),

@@ -3,10 +3,10 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
-#include <atomic>
 #include <mutex>
 
 namespace estlab {
@@ -87,7 +87,7 @@ int RemoveStaleTempFiles(const std::string& folder) {
     const long pid = TempFilePid(it->path().filename().string());
     if (pid <= 0 || pid == long(::getpid()) || it->is_symlink(ec)) continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to see)
-    if (fs::remove_all(it->path(), ec) > 0) ++removed;  // a file, or a folder (merge)
+    if (fs::remove_all(it->path(), ec) > 0) ++removed;           // a file, or a folder (merge)
   }
   return removed;
 }

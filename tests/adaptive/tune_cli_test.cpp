@@ -268,12 +268,14 @@ TEST_F(TuneCli, CvodesWorkPerTrialPointIsBounded) {
   const std::string tune =
       "tune --model pendulum --measure sin --filter ekf --integrator cvodes --x0 theta=0.785398 "
       "--p0-diag 1e-4,1e-4 --data train.csv --max-iterations 5 --json ";
-  const CmdResult tight = Estlab(tune + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 "
-                                        "--max-integrator-steps 1");
+  const CmdResult tight = Estlab(tune +
+                                 "--init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+                                 "--max-integrator-steps 1");
   EXPECT_EQ(tight.exit_code, 1) << tight.err;
   EXPECT_NE(tight.out.find("\"status\": \"all-starts-"), std::string::npos) << tight.out;
-  EXPECT_NE((tight.out + tight.err).find("intervals, more than 10^4 + 1 (max integrator steps) "
-                                         "per interval"),
+  EXPECT_NE((tight.out + tight.err)
+                .find("intervals, more than 10^4 + 1 (max integrator steps) "
+                      "per interval"),
             std::string::npos)
       << tight.out << tight.err;
   const CmdResult sane = Estlab(tune + "--init-q-diag 1e-4,1e-2 --init-r-diag 1");
@@ -281,8 +283,9 @@ TEST_F(TuneCli, CvodesWorkPerTrialPointIsBounded) {
   const CmdResult absurd = Estlab(tune + "--init-q-white-accel 1e12 --init-r-diag 1e-12");
   EXPECT_TRUE(absurd.exit_code == 0 || absurd.exit_code == 1) << absurd.err;
   EXPECT_NE(absurd.out.find("\"status\": "), std::string::npos) << absurd.out;
-  const CmdResult bad = Estlab(tune + "--init-q-diag 1e-4,1e-2 --init-r-diag 1 "
-                                      "--max-integrator-steps 0");
+  const CmdResult bad = Estlab(tune +
+                               "--init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+                               "--max-integrator-steps 0");
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
   EXPECT_NE(bad.err.find("max integrator steps must be in 1..1e8, got 0"), std::string::npos)
       << bad.err;

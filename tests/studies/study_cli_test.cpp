@@ -135,6 +135,17 @@ std::vector<std::string> TempEntries(const std::string& dir) {
   return names;
 }
 
+// `estlab study s.ini --shard k/2` into s1 and s2.
+bool RunTwoShards(const TempDir& dir) {
+  for (int k = 1; k <= 2; ++k) {
+    const std::string K = std::to_string(k);
+    if (RunEstlab("study s.ini --quiet --out s" + K + " --shard " + K + "/2", dir.path())
+            .exit_code != 0)
+      return false;
+  }
+  return true;
+}
+
 // Issue 15 item 6: merge used to accept damaged shards (a missing file, a
 // run's rows deleted, a cut-off last line) and write a wrong summary. Each
 // shard is now checked against the checksums its study.state recorded when
@@ -142,12 +153,7 @@ std::vector<std::string> TempEntries(const std::string& dir) {
 // names the shard and the problem, and nothing is written.
 TEST_F(StudyCli, MergeRefusesDamagedShardsNamingTheProblem) {
   WriteText(dir_.File("s.ini"), TinyStudy(4));
-  for (int k = 1; k <= 2; ++k)
-    ASSERT_EQ(RunEstlab("study s.ini --quiet --out s" + std::to_string(k) + " --shard " +
-                            std::to_string(k) + "/2",
-                        dir_.path())
-                  .exit_code,
-              0);
+  ASSERT_TRUE(RunTwoShards(dir_));
   namespace fs = std::filesystem;
   const auto damaged = [&](const std::function<void(const std::string&)>& damage,
                            const std::string& expected) {
@@ -183,8 +189,8 @@ TEST_F(StudyCli, MergeRefusesDamagedShardsNamingTheProblem) {
         std::string state;
         for (const auto& line : SplitLines(ReadFile(d + "/study.state")))
           state += (line.size() > 10 && line.substr(line.size() - 10) == " steps.csv"
-                        ? "file = " + std::to_string(steps.size()) + " " +
-                              HashHex(Fnv1a64(steps)) + " steps.csv"
+                        ? "file = " + std::to_string(steps.size()) + " " + HashHex(Fnv1a64(steps)) +
+                              " steps.csv"
                         : line) +
                    "\n";
         WriteText(d + "/study.state", state);
@@ -209,12 +215,7 @@ TEST_F(StudyCli, MergeRefusesDamagedShardsNamingTheProblem) {
 // folder of a merge that was killed is removed by the next merge there.
 TEST_F(StudyCli, MergeOnAFullDiskLeavesNoOutAndARerunWorks) {
   WriteText(dir_.File("s.ini"), TinyStudy(4));
-  for (int k = 1; k <= 2; ++k)
-    ASSERT_EQ(RunEstlab("study s.ini --quiet --out s" + std::to_string(k) + " --shard " +
-                            std::to_string(k) + "/2",
-                        dir_.path())
-                  .exit_code,
-              0);
+  ASSERT_TRUE(RunTwoShards(dir_));
   const auto full = RunEstlabWithFileLimit("merge m s1 s2", dir_.path(), 4);
   EXPECT_NE(full.exit_code, 0);
   EXPECT_NE(full.err.find("estlab: error: "), std::string::npos) << full.err;
@@ -376,8 +377,8 @@ TEST_F(StudyCli, ResumeReusesSavedTuningsAndShowsTuningProgress) {
         << f;
   // A saved result of another configuration is never taken: it is tuned again.
   WriteText(dir_.File("part/tuning/pend.ekf.tuned.tuned"),
-            Replace(ReadFile(dir_.File("part/tuning/pend.ekf.tuned.tuned")), "config-hash = ",
-                    "config-hash = 0"));
+            Replace(ReadFile(dir_.File("part/tuning/pend.ekf.tuned.tuned")),
+                    "config-hash = ", "config-hash = 0"));
   const auto more = RunEstlab("study s.ini --out part --runs 5", dir_.path());
   ASSERT_EQ(more.exit_code, 0) << more.err;
   EXPECT_NE(more.err.find("tuning Q/R of 1 'tuned' noise setting(s) (1 reused"), std::string::npos)

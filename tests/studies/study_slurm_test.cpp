@@ -37,8 +37,8 @@ class StudySlurm : public ::testing::Test {
   RunResult Estlab(const std::string& args) {
     const std::string out = dir_.File("../slurm.out"), err = dir_.File("../slurm.err");
     const std::string cmd = "cd '" + dir_.path() + "' && PATH='" + dir_.File("bin") +
-                            "':\"$PATH\" '" + ESTLAB_BINARY + "' " + args + " >'" + out +
-                            "' 2>'" + err + "'";
+                            "':\"$PATH\" '" + ESTLAB_BINARY + "' " + args + " >'" + out + "' 2>'" +
+                            err + "'";
     const int status = std::system(cmd.c_str());
     RunResult r;
     if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
@@ -59,8 +59,10 @@ TEST_F(StudySlurm, SubmitsAnArrayAndAMergeThatDependsOnIt) {
   ASSERT_EQ(calls.size(), 2u) << log;
   const std::string slurm = fs::canonical(dir_.path()).string() + "/res.slurm";
   EXPECT_EQ(calls[0], "100 --parsable --array=1,2,3 --time=5 " + slurm + "/array.sh");
-  EXPECT_EQ(calls[1], "101 --parsable --dependency=afterok:100 --kill-on-invalid-dep=yes "
-                      "--time=5 " + slurm + "/merge.sh");
+  EXPECT_EQ(calls[1],
+            "101 --parsable --dependency=afterok:100 --kill-on-invalid-dep=yes "
+            "--time=5 " +
+                slurm + "/merge.sh");
   EXPECT_NE(r.out.find("submitted shard(s) 1,2,3 of 3 as array job 100"), std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("squeue -j 100,101"), std::string::npos) << r.out;
@@ -92,7 +94,7 @@ TEST_F(StudySlurm, ResubmissionRunsOnlyUnfinishedShards) {
               0);
   const auto status = Estlab("study --status res");
   ASSERT_EQ(status.exit_code, 0) << status.err;
-  EXPECT_NE(status.out.find("res: not started"), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("res: not merged"), std::string::npos) << status.out;
   EXPECT_NE(status.out.find("2 of 3 shards complete"), std::string::npos) << status.out;
   EXPECT_NE(status.out.find("  2      not started   0/2"), std::string::npos) << status.out;
   EXPECT_NE(status.out.find("  3      complete      2/2"), std::string::npos) << status.out;
@@ -104,8 +106,7 @@ TEST_F(StudySlurm, ResubmissionRunsOnlyUnfinishedShards) {
 
   // The merge job's work, done here; then there is nothing to submit.
   ASSERT_EQ(Estlab("study s.ini --quiet --out res.slurm/shard-2 --shard 2/3").exit_code, 0);
-  ASSERT_EQ(
-      Estlab("merge res res.slurm/shard-1 res.slurm/shard-2 res.slurm/shard-3").exit_code, 0);
+  ASSERT_EQ(Estlab("merge res res.slurm/shard-1 res.slurm/shard-2 res.slurm/shard-3").exit_code, 0);
   const auto done = Estlab("study s.ini --out res --slurm 3");
   EXPECT_EQ(done.exit_code, 0) << done.err;
   EXPECT_NE(done.out.find("holds the merged study already; nothing to submit"), std::string::npos)
@@ -134,8 +135,9 @@ TEST_F(StudySlurm, BadSlurmOptionsExitTwo) {
   EXPECT_EQ(alone.exit_code, 2);
   EXPECT_FALSE(dir_.Exists("res.slurm"));
   // sbatch refusing the job: its message, and an error exit.
-  WriteText(dir_.File("bin/sbatch"), "#!/bin/sh\necho 'sbatch: error: invalid partition' >&2\n"
-                                     "exit 1\n");
+  WriteText(dir_.File("bin/sbatch"),
+            "#!/bin/sh\necho 'sbatch: error: invalid partition' >&2\n"
+            "exit 1\n");
   const auto refused = Estlab("study s.ini --out res3 --slurm 2");
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.err.find("sbatch failed (exit 1): sbatch: error: invalid partition"),
