@@ -133,6 +133,15 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
       if (nc.role != "hand" && nc.role != "tuned" && nc.role != "oracle" && nc.role != "other")
         v.Fail("role", "expected hand, tuned, oracle or other, got '" + nc.role + "'");
     }
+    if (v.Has("tune-estimator")) {
+      nc.estimator = v.Get("tune-estimator")->text;
+      if (nc.estimator != "ml" && nc.estimator != "em" && nc.estimator != "als")
+        v.Fail("tune-estimator", "expected ml, em or als, got '" + nc.estimator + "'");
+    }
+    nc.init_scale = text_of("init-scale");
+    if (v.Has("tune-per-run"))
+      nc.per_run = Checked(*v.Get("tune-per-run"), err,
+                           [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
     if (v.Has("scenarios"))
       nc.scenarios = Checked(*v.Get("scenarios"), err,
                              [](const std::string& t) { return ParseNameList(t, "scenarios"); });
@@ -200,6 +209,7 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
             continue;
           sc.combos.push_back(
               BuildCombo(sc, v, int(fi), filter_values[fi], int(ni), noise_values[ni], err));
+          c.identification |= sc.combos.back().tune_per_run;
         }
       }
       if (sc.combos.empty())

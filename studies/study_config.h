@@ -96,6 +96,13 @@
 //   params = tuned L,b               # also fit these model parameters (from the
 //   param-bounds = b=0:5             #   scenario's params), as estlab tune
 //   param-prior = L=normal:1:0.1     #   --estimate-param; the filters run with them
+//   tune-estimator = ml              # ml (default) | em | als (estlab tune --estimator;
+//                                    #   em: at most tune-max-iterations, default 1000)
+//   tune-max-iterations = 200        # optimiser / EM iterations
+//   tune-per-run = true              # every run fits its own Q/R on its own measurements
+//                                    #   (default false: once before the runs); runs.csv
+//                                    #   gets id_status, id_q_err, id_r_err, ...
+//   init-scale = 0.01                # start from this multiple of the oracle (robustness)
 //
 //   [report]                         # optional: the paper's numbers and claims
 //   paper = 002
@@ -155,6 +162,11 @@ struct Combo {
   TunerOptions tuner;
   int tune_datasets = 0;
   std::string tune_failure;  // set by the runner when no tuned Q/R came out
+  // tune-per-run = true: no tuning before the runs; every run fits its own
+  // Q/R on its own measurements (the way a user tunes one recording) and
+  // filters them with the result; runs.csv gets the identification columns
+  // (IdentificationColumns, study_results.h).
+  bool tune_per_run = false;
 };
 
 struct ScenarioConfig {
@@ -216,6 +228,10 @@ struct NoiseConfig {
   std::string role;
   std::vector<std::string> scenarios;  // empty = all
   std::vector<std::string> filters;    // empty = all
+  // tune-estimator (ml | em | als) and tune-per-run of a tuned setting.
+  std::string estimator = "ml";
+  bool per_run = false;
+  std::string init_scale;  // the init-scale text, "" when not given
 };
 
 // A number from the paper, to be printed beside ours in report.md.
@@ -259,6 +275,9 @@ struct StudyConfig {
   // pred_rmse_OUTPUT) only when this is not empty, so that studies on
   // simulated data keep their files.
   std::vector<std::string> output_columns;
+  // Some noise setting has tune-per-run = true: runs.csv and timing.csv get
+  // the identification columns (study_results.h), the report its section.
+  bool identification = false;
 };
 
 // Reads and validates `path` completely (every FilterSpec is built and every

@@ -151,6 +151,23 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (r_oracle_std)
       for (double& x : spec.r) x = std::sqrt(x);
   }
+  // init-scale = s: the tuner starts from s times the oracle (robustness).
+  if (noise.Has("init-scale")) {
+    const double scale = Checked(*noise.Get("init-scale"), err, [](const std::string& t) {
+      const double v = ParseNumber(t, "init-scale");
+      if (!(v > 0 && std::isfinite(v)))
+        throw InputError("init-scale must be a finite number > 0, got '" + t + "'");
+      return v;
+    });
+    if (!(q_tuned && q_oracle) && !(r_tuned && r_oracle))
+      noise.Fail("init-scale", "scales the oracle start of q = tuned or r = tuned (no init-* key)");
+    if (q_tuned && q_oracle) {
+      spec.qc *= scale;
+      for (double& x : spec.q) x *= scale;
+    }
+    if (r_tuned && r_oracle)
+      for (double& x : spec.r) x *= scale;
+  }
   // Simulated runs: the prior holds at t = 0; recorded runs: at the first row.
   spec.has_t0 = !sc.measure_at_t0 && !sc.recorded;
   spec.t0 = 0.0;
@@ -229,6 +246,21 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       combo.tune_datasets = int(sc.tune_runs.size());
     }
     t.starts = integer("tune-starts", 1, 1, 10000);
+    const std::string estimator = noise.Has("tune-estimator") ? noise.Get("tune-estimator")->text
+                                                              : std::string("ml");
+    t.form = ParseTunerForm(estimator == "ml" ? "lbfgs" : estimator);
+    t.em_compare_ml = false;  // the study scores EM's own solution
+    t.max_iterations = integer("tune-max-iterations", estimator == "em" ? 1000 : 200, 1, 1000000);
+    combo.tune_per_run = noise.Has("tune-per-run") &&
+                         Checked(*noise.Get("tune-per-run"), err, [](const std::string& t) {
+                           return ParseBool(t, "tune-per-run");
+                         });
+    if (combo.tune_per_run && sc.recorded)
+      noise.Fail("tune-per-run",
+                 "applies to simulated scenarios: [" + sc.section +
+                     "] tunes on its tune-data files (and has no truth noise to compare with)");
+    if (combo.tune_per_run && noise.Has("tune-datasets"))
+      noise.Fail("tune-datasets", "with tune-per-run each run fits on its own measurements");
     t.estimate = estimate;
     t.burn_in = integer("tune-burn-in", 0, 0, kMaxSteps);
     t.compute_std_errors = true;
@@ -238,7 +270,8 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
                                         "] and [" + noise.section().full + "]: " + error);
   } else {
-    for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in"})
+    for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in",
+                            "tune-estimator", "tune-max-iterations", "tune-per-run"})
       if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
   }
   return combo;
@@ -264,6 +297,11 @@ std::string NoiseDescription(const SectionValues& noise) {
   std::string d = "Q " + describe("q", {"q", "q-diag", "q-white-accel"}) + ", R " +
                   describe("r", {"r", "r-diag"});
   if (noise.Has("params")) d += ", model parameters " + noise.Get("params")->text;
+  if (noise.Has("tune-estimator")) d += ", estimator " + noise.Get("tune-estimator")->text;
+  if (noise.Has("init-scale")) d += ", started at " + noise.Get("init-scale")->text + " x the oracle";
+  const std::string per_run = noise.Has("tune-per-run") ? noise.Get("tune-per-run")->text : "";
+  if (per_run == "true" || per_run == "yes" || per_run == "1")
+    d += ", fitted in every run on its own measurements";
   if (noise.Has("tune-datasets") || noise.Has("tune-starts"))
     d += " (" + (noise.Has("tune-datasets") ? noise.Get("tune-datasets")->text : "3") +
          " tuning trajectories, " +

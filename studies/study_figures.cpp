@@ -15,6 +15,7 @@
 #include "src/registry/registry.h"
 #include "studies/gnuplot_figure.h"
 #include "studies/study_config.h"
+#include "studies/study_figures_identification.h"
 #include "studies/study_results.h"
 
 namespace fs = std::filesystem;
@@ -457,6 +458,7 @@ FiguresSummary DrawStudyFigures(const std::string& dir, const FiguresOptions& op
     MeansFigures(config, sc, combos, summary, out.folder, term, &out.scripts);
   }
   SweepFigures(config, summary, out.folder, term, &out.scripts);
+  IdentificationFigures(dir + "/identification.csv", out.folder, term, &out.scripts);
   RenderFigures(options, &out);
   return out;
 }

@@ -11,6 +11,9 @@
 // and on recorded data (no truth: no RMSE figures, NIS without NEES):
 //   SCEN_pred_rmse_means             one-step prediction RMSE per output, 95 % CI
 //   SCEN_nll_means                   innovation NLL per step, 95 % CI
+// and with tune-per-run noise settings (study_figures_identification.h):
+//   SCEN_score_cost                  score against the oracle vs cost per run
+//   SCEN_id_error                    identified Q's and R's errors over the runs
 //
 // Usage:
 //   FiguresSummary f = DrawStudyFigures("results/paper002", FiguresOptions{});

@@ -147,7 +147,7 @@ RunCoverage CheckRunCoverage(const StudyConfig& config, const std::string& dir, 
     ++c->runs_rows[size_t(i)];
     c->steps[size_t(i)] = std::strtol(r[steps_col].c_str(), nullptr, 10);
   });
-  ForEachRow(dir + "/timing.csv", TimingColumns(), &dropped,
+  ForEachRow(dir + "/timing.csv", TimingColumns(config), &dropped,
              [&](const std::vector<std::string>& r) {
                const long i = coverage.Count("timing.csv", r, &c);
                if (i >= 0) ++c->timing_rows[size_t(i)];

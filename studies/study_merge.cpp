@@ -100,7 +100,7 @@ void WriteMerged(const std::string& dir, const StudyConfig& config, const std::s
     };
     add("runs.csv", RunsColumns(config), &runs);
     add("steps.csv", StepsColumns(config), &steps);
-    add("timing.csv", TimingColumns(), &timing);
+    add("timing.csv", TimingColumns(config), &timing);
     wall += states[i].wall_s;
     const fs::path ts = fs::path(shard_dirs[i]) / "timeseries";
     if (fs::exists(ts))
@@ -123,7 +123,7 @@ void WriteMerged(const std::string& dir, const StudyConfig& config, const std::s
   };
   write_rows("runs.csv", RunsColumns(config), runs);
   write_rows("steps.csv", StepsColumns(config), steps);
-  write_rows("timing.csv", TimingColumns(), timing);
+  write_rows("timing.csv", TimingColumns(config), timing);
   StudyState merged = states[0];
   merged.shard = merged.shards = 1;
   merged.status = "complete";

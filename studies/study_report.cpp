@@ -318,12 +318,28 @@ struct CompareCase {
 MetricStats ScoreDifference(const StudyTables& t, const ScenarioConfig& sc,
                             const std::string& filter, const std::string& a, const std::string& b,
                             const std::string& ref) {
+  return PairedScoreDifference(t, sc, {filter, a}, {filter, b}, {filter, ref});
+}
+
+double Score(const StudyTables& t, const ScenarioConfig& sc, const std::string& filter,
+             const std::string& noise, const std::string& ref) {
+  return ScoreAgainst(t, sc, {filter, noise}, {filter, ref});
+}
+
+}  // namespace
+
+namespace study_report {
+
+MetricStats PairedScoreDifference(const StudyTables& t, const ScenarioConfig& sc,
+                                  const FilterNoise& a, const FilterNoise& b,
+                                  const FilterNoise& ref) {
   const auto& states = sc.model->states;
   std::map<long, std::pair<double, int>> per_run;  // run -> (sum, states seen)
   for (const auto& st : states) {
     const std::string metric = "rmse_" + st;
-    const RoleCell ca = Cell(t, sc, filter, a, metric), cb = Cell(t, sc, filter, b, metric);
-    const double scale = Cell(t, sc, filter, ref, metric).stats.mean;
+    const RoleCell ca = Cell(t, sc, a.filter, a.noise, metric);
+    const RoleCell cb = Cell(t, sc, b.filter, b.noise, metric);
+    const double scale = Cell(t, sc, ref.filter, ref.noise, metric).stats.mean;
     std::map<long, double> vb;
     for (size_t i = 0; i < cb.runs.size(); ++i) vb[cb.runs[i]] = cb.values[i];
     for (size_t i = 0; i < ca.runs.size(); ++i) {
@@ -340,18 +356,21 @@ MetricStats ScoreDifference(const StudyTables& t, const ScenarioConfig& sc,
   return ComputeStats(d);
 }
 
-double Score(const StudyTables& t, const ScenarioConfig& sc, const std::string& filter,
-             const std::string& noise, const std::string& ref) {
+double ScoreAgainst(const StudyTables& t, const ScenarioConfig& sc, const FilterNoise& x,
+                    const FilterNoise& ref) {
   double sum = 0;
   for (const auto& st : sc.model->states) {
-    const double m = Cell(t, sc, filter, noise, "rmse_" + st).stats.mean;
-    const double r = Cell(t, sc, filter, ref, "rmse_" + st).stats.mean;
-    const MetricStats ms = Cell(t, sc, filter, noise, "rmse_" + st).stats;
+    const MetricStats ms = Cell(t, sc, x.filter, x.noise, "rmse_" + st).stats;
+    const double r = Cell(t, sc, ref.filter, ref.noise, "rmse_" + st).stats.mean;
     if (ms.n == 0 || !(r > 0)) return NAN;
-    sum += m / r;
+    sum += ms.mean / r;
   }
   return sum / double(sc.model->states.size());
 }
+
+}  // namespace study_report
+
+namespace {
 
 // The hand settings are "the paper's" only when [report] names a paper; a
 // study of the user's own data has its own hand settings.
@@ -365,7 +384,7 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
         if (cb.filter != int(fi)) continue;
         const std::string& role = c.noises[cb.noise].role;
         if (role == "hand") hands.push_back(&cb);
-        if (role == "tuned") tuneds.push_back(&cb);
+        if (role == "tuned" && !cb.tune_per_run) tuneds.push_back(&cb);  // per run: below
         if (role == "oracle") oracles.push_back(&cb);
       }
       if (tuneds.empty() || (hands.empty() && oracles.empty())) continue;
@@ -716,6 +735,7 @@ std::string StudyReportMarkdown(const StudyConfig& c, const StudyTables& t,
   OverviewSection(md, c, t);
   ReferenceSection(md, c, t);
   HandAutoOracleSection(md, c, t);
+  study_report::NoiseIdentificationSection(md, c, t);
   study_report::RecordedDataSection(md, c, t);
   ClaimsSection(md, c, t);
   if (!c.notes.empty()) {

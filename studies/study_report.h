@@ -25,6 +25,9 @@ struct GroupValues {
   std::vector<long> run_index;                        // of the ok rows, aligned with `values`
   std::map<std::string, std::vector<double>> values;  // metric -> per ok run
   std::vector<double> us_per_step;                    // every run (timing.csv)
+  std::vector<double> filter_wall_s;                  // every run (timing.csv)
+  std::vector<double> identify_wall_s;                // tune-per-run: every run's tuner time
+  long tune_failed = 0;                               // rows with status tune_failed
 };
 
 struct StudyTables {
@@ -34,6 +37,16 @@ struct StudyTables {
 
 std::string StudyReportMarkdown(const StudyConfig& config, const StudyTables& tables,
                                 const StudyState& state);
+
+// identification.csv of a study with tune-per-run settings ("" without):
+// per scenario x filter x noise its score against the scenario's reference
+// with the paired 95 % CI, the NEES consistency, the identified Q/R's
+// relative errors (median, 2.5 and 97.5 percentiles), the rates of failed,
+// unconverged and at-bound tunings, iterations and the mean wall time per
+// run of identification + filter (the cost: not reproducible to the byte,
+// unlike runs.csv). report.md's noise-identification section and the
+// score-vs-cost figure are drawn from the same rows.
+std::string IdentificationCsv(const StudyConfig& config, const StudyTables& tables);
 
 }  // namespace estlab
 

@@ -37,10 +37,36 @@ std::vector<double> Values(const GroupValues* g, const std::string& metric);
 // "0.1734 ± 0.045 [0.1646, 0.1822]"
 std::string MeanCell(const MetricStats& s);
 
+// A filter x noise setting of a scenario.
+struct FilterNoise {
+  std::string filter, noise;
+};
+
+// The score of x against ref: the mean over the states of x's mean RMSE
+// divided by ref's, so that ref scores 1 and states in different units weigh
+// alike. NaN when either has no finished run.
+double ScoreAgainst(const StudyTables& t, const ScenarioConfig& sc, const FilterNoise& x,
+                    const FilterNoise& ref);
+// The per-run differences of the scores of a and b (each run's RMSEs divided
+// by ref's mean RMSE, averaged over the states) over the runs where a and b
+// finished every state: their mean and 95 % CI is the paired comparison.
+MetricStats PairedScoreDifference(const StudyTables& t, const ScenarioConfig& sc,
+                                  const FilterNoise& a, const FilterNoise& b,
+                                  const FilterNoise& ref);
+
 // The section on the scenarios that run on recorded data: which metrics were
 // available without truth, the table of those metrics and the hand vs
 // tuned comparison on them. Nothing when no scenario is recorded.
 void RecordedDataSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t);
+
+// The noise-identification comparison (study_report_identification.cpp):
+// per scenario with a truth, every filter x noise setting ranked by its
+// score against the scenario's reference (the first filter's oracle), with
+// the identified Q/R's errors, failures and cost; a ranking over the
+// scenarios; a sentence for each result that reverses common wisdom.
+// Nothing unless the study has tune-per-run settings.
+void NoiseIdentificationSection(std::ostringstream& md, const StudyConfig& c,
+                                const StudyTables& t);
 
 }  // namespace estlab::study_report
 

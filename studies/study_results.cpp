@@ -33,9 +33,15 @@ std::vector<std::string> RunsColumns(const StudyConfig& config) {
     for (const char* m : {"nll_per_step", "nis_lo95", "nis_hi95"}) c.push_back(m);
     for (const auto& o : config.output_columns) c.push_back("pred_rmse_" + o);
   }
+  if (config.identification)
+    for (const auto& id : IdentificationColumns()) c.push_back(id);
   c.push_back("steps");
   c.push_back("message");
   return c;
+}
+
+std::vector<std::string> IdentificationColumns() {
+  return {"id_q_err", "id_r_err", "id_iterations", "id_converged", "id_at_bound"};
 }
 
 std::vector<std::string> StepsColumns(const StudyConfig& config) {
@@ -46,8 +52,11 @@ std::vector<std::string> StepsColumns(const StudyConfig& config) {
   return c;
 }
 
-std::vector<std::string> TimingColumns() {
-  return {"scenario", "filter", "noise", "run", "us_per_step", "filter_wall_s", "truth_wall_s"};
+std::vector<std::string> TimingColumns(const StudyConfig& config) {
+  std::vector<std::string> c = {"scenario",    "filter",        "noise",       "run",
+                                "us_per_step", "filter_wall_s", "truth_wall_s"};
+  if (config.identification) c.push_back("identify_wall_s");
+  return c;
 }
 
 namespace {
@@ -422,7 +431,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
   // grow with its number of runs (tests/perf/study_memory_test.cpp).
   Canonicalize(config, dir + "/runs.csv", runs_cols);
   Canonicalize(config, dir + "/steps.csv", steps_cols);
-  Canonicalize(config, dir + "/timing.csv", TimingColumns());
+  Canonicalize(config, dir + "/timing.csv", TimingColumns(config));
   bool dropped = false;
 
   // Per-group values of every metric, runs with status ok only.
@@ -437,6 +446,7 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
     const std::string g = GroupKey(r[0], r[1], r[2]);
     GroupValues& gv = tables.groups[g];
     ++gv.runs;
+    if (r[5] == "tune_failed") ++gv.tune_failed;
     if (r[5] != "ok") return;
     const long run = std::stol(r[3]);
     std::vector<char>& flags = ok_runs[g];
@@ -452,9 +462,13 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
     }
   });
   if (fs::exists(dir + "/tuned.csv")) tables.tuned = ReadCsvText(dir + "/tuned.csv");
-  StreamRowFile(dir + "/timing.csv", TimingColumns(), &dropped,
+  StreamRowFile(dir + "/timing.csv", TimingColumns(config), &dropped,
                 [&](const std::vector<std::string>& r) {
-                  tables.groups[GroupKey(r[0], r[1], r[2])].us_per_step.push_back(ToDouble(r[4]));
+                  GroupValues& gv = tables.groups[GroupKey(r[0], r[1], r[2])];
+                  gv.us_per_step.push_back(ToDouble(r[4]));
+                  gv.filter_wall_s.push_back(ToDouble(r[5]));
+                  if (config.identification && !r[7].empty())
+                    gv.identify_wall_s.push_back(ToDouble(r[7]));
                 });
 
   // summary.csv
@@ -478,7 +492,10 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
         const std::string& n = config.noises[cb.noise].name;
         const auto it = tables.groups.find(GroupKey(sc.name, f, n));
         if (it == tables.groups.end()) continue;
-        for (const auto& metric : metrics) {
+        std::vector<std::string> combo_metrics = metrics;
+        if (cb.tune_per_run)
+          for (const auto& id : IdentificationColumns()) combo_metrics.push_back(id);
+        for (const auto& metric : combo_metrics) {
           const MetricStats s = ComputeStats(it->second.values[metric]);
           out.stream() << FormatCsvRow({sc.name, f, n, metric, std::to_string(it->second.runs),
                                         std::to_string(s.n), Num(s.mean), Num(s.std), Num(s.var),
@@ -557,6 +574,8 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
 
   StudyState state;
   ReadStudyState(dir, &state);
+  const std::string identification = IdentificationCsv(config, tables);
+  if (!identification.empty()) WriteTextFile(dir + "/identification.csv", identification);
   const std::string report = StudyReportMarkdown(config, tables, state);
   WriteTextFile(dir + "/report.md", report);
   return report;

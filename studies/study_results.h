@@ -34,7 +34,18 @@ namespace estlab {
 // Column headers of the per-run files.
 std::vector<std::string> RunsColumns(const StudyConfig& config);
 std::vector<std::string> StepsColumns(const StudyConfig& config);
-std::vector<std::string> TimingColumns();
+std::vector<std::string> TimingColumns(const StudyConfig& config);
+// With tune-per-run noise settings (config.identification), the columns of
+// runs.csv (before steps) that say how well each run identified Q and R:
+//   id_q_err, id_r_err  relative Frobenius error ||Q^ - Q||_F / ||Q||_F of the
+//                       tuned per-step covariance against the truth's (R alike);
+//                       empty for a fixed Q (R) and for settings not tuned per run
+//   id_iterations       optimiser / EM iterations
+//   id_converged        1 when the tuner converged, 0 when it stopped at its limit
+//   id_at_bound         1 when an estimate ended at (or near) its search bound
+// A run whose tuning failed has status tune_failed. timing.csv gets
+// identify_wall_s, the tuner's wall time in that run.
+std::vector<std::string> IdentificationColumns();
 
 // A CSV row file written run by run: the header and the rows, with a partial
 // last line (an interrupted write) dropped. Throws InputError when the

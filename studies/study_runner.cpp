@@ -30,6 +30,7 @@
 #include "src/io/folder_lock.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "studies/study_identification.h"
 #include "studies/study_integrity.h"
 #include "studies/study_metrics.h"
 #include "studies/study_runner_parts.h"
@@ -212,6 +213,18 @@ void AppendNoTruthMetrics(const StudyConfig& c, const ScenarioConfig& sc, bool r
   }
 }
 
+// The IdentificationColumns of a runs.csv row: empty unless the combo
+// tunes per run and its tuner gave a result.
+void AppendIdentification(const Combo& cb, const RunIdentification& id,
+                          std::vector<std::string>* row) {
+  const bool has = cb.tune_per_run && id.failure.empty();
+  row->push_back(has ? Full(id.q_err) : "");
+  row->push_back(has ? Full(id.r_err) : "");
+  row->push_back(has ? std::to_string(id.iterations) : "");
+  row->push_back(has ? (id.converged ? "1" : "0") : "");
+  row->push_back(has ? (id.at_bound ? "1" : "0") : "");
+}
+
 // Run `run` of a scenario: its simulated truth and measurements, or its
 // recorded file. Sets *truth_error when the truth could not be simulated.
 FilterData RunData(const ScenarioConfig& sc, int run, uint64_t seed, SimulationResult* truth,
@@ -248,14 +261,17 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     const std::vector<std::string> key = {sc.name, fname, nname, std::to_string(run)};
     FilterRunOutput out;
     std::string status = "ok", message;
+    RunIdentification id;
+    if (cb.tune_per_run && truth_error.empty())
+      id = IdentifyInRun(sc, cb, data, ComboSeed(seed, fname, nname));
     if (!truth_error.empty()) {
       status = "truth_failed";
       message = truth_error;
-    } else if (!cb.tune_failure.empty()) {
+    } else if (!cb.tune_failure.empty() || !id.failure.empty()) {
       status = "tune_failed";
-      message = cb.tune_failure;
+      message = cb.tune_per_run ? id.failure : cb.tune_failure;
     } else {
-      FilterSpec spec = cb.spec;
+      FilterSpec spec = cb.tune_per_run ? id.spec : cb.spec;
       if (auto* pf = std::get_if<ParticleOptions>(&spec.filter))
         pf->seed = ComboSeed(seed, fname, nname);
       try {
@@ -299,6 +315,7 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     row.push_back(ran ? inside(mean_nis, nis_bounds) : "");
     row.push_back(ran ? Full(sum.loglik) : "");
     if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
+    if (c.identification) AppendIdentification(cb, id, &row);
     row.push_back(std::to_string(sum.steps));
     row.push_back(message);
     text.runs += FormatCsvRow(row);
@@ -307,6 +324,7 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     timing.push_back(Sig6(sum.us_per_step));
     timing.push_back(Sig6(sum.wall_s));
     timing.push_back(Sig6(truth.wall_s));
+    if (c.identification) timing.push_back(cb.tune_per_run ? Sig6(id.wall_s) : "");
     text.timing += FormatCsvRow(timing);
 
     // Per-step errors, every `every` steps and the last.
@@ -556,7 +574,7 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
                 << "); running them again\n";
     KeepFinished(dir + "/runs.csv", runs_cols, finished);
     KeepFinished(dir + "/steps.csv", steps_cols, finished);
-    KeepFinished(dir + "/timing.csv", TimingColumns(), finished);
+    KeepFinished(dir + "/timing.csv", TimingColumns(config), finished);
   }
 
   struct Task {

@@ -290,7 +290,7 @@ StudyTuningSummary TuneStudyNoise(StudyConfig* config, const StudyTuningOptions&
   for (size_t s = 0; s < config->scenarios.size(); ++s)
     for (size_t c = 0; c < config->scenarios[s].combos.size(); ++c) {
       const Combo& cb = config->scenarios[s].combos[c];
-      if (cb.tune)
+      if (cb.tune && !cb.tune_per_run)  // per run: tuned by the runner, in each run
         keys.push_back({int(s), int(c), config->scenarios[s].name, config->filters[cb.filter].name,
                         config->noises[cb.noise].name});
     }
