@@ -99,6 +99,7 @@
 //   tune-estimator = ml              # ml (default) | em | als (estlab tune --estimator;
 //                                    #   em: at most tune-max-iterations, default 1000)
 //   tune-max-iterations = 200        # optimiser / EM iterations
+//   tune-tolerance = 1e-6            # em: stop at this relative NLL change (default 1e-9)
 //   tune-per-run = true              # every run fits its own Q/R on its own measurements
 //                                    #   (default false: once before the runs); runs.csv
 //                                    #   gets id_status, id_q_err, id_r_err, ...

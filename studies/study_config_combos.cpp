@@ -246,15 +246,20 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       combo.tune_datasets = int(sc.tune_runs.size());
     }
     t.starts = integer("tune-starts", 1, 1, 10000);
-    const std::string estimator = noise.Has("tune-estimator") ? noise.Get("tune-estimator")->text
-                                                              : std::string("ml");
+    const std::string estimator =
+        noise.Has("tune-estimator") ? noise.Get("tune-estimator")->text : std::string("ml");
     t.form = ParseTunerForm(estimator == "ml" ? "lbfgs" : estimator);
     t.em_compare_ml = false;  // the study scores EM's own solution
     t.max_iterations = integer("tune-max-iterations", estimator == "em" ? 1000 : 200, 1, 1000000);
+    if (noise.Has("tune-tolerance")) {
+      if (estimator != "em") noise.Fail("tune-tolerance", "applies to tune-estimator = em");
+      t.em_tolerance = Checked(*noise.Get("tune-tolerance"), err, [](const std::string& v) {
+        return ParseNumber(v, "tune-tolerance");
+      });
+    }
     combo.tune_per_run = noise.Has("tune-per-run") &&
-                         Checked(*noise.Get("tune-per-run"), err, [](const std::string& t) {
-                           return ParseBool(t, "tune-per-run");
-                         });
+                         Checked(*noise.Get("tune-per-run"), err,
+                                 [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
     if (combo.tune_per_run && sc.recorded)
       noise.Fail("tune-per-run",
                  "applies to simulated scenarios: [" + sc.section +
@@ -270,8 +275,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
                                         "] and [" + noise.section().full + "]: " + error);
   } else {
-    for (const char* key : {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in",
-                            "tune-estimator", "tune-max-iterations", "tune-per-run"})
+    for (const char* key :
+         {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in", "tune-estimator",
+          "tune-max-iterations", "tune-per-run", "tune-tolerance"})
       if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
   }
   return combo;
@@ -298,7 +304,8 @@ std::string NoiseDescription(const SectionValues& noise) {
                   describe("r", {"r", "r-diag"});
   if (noise.Has("params")) d += ", model parameters " + noise.Get("params")->text;
   if (noise.Has("tune-estimator")) d += ", estimator " + noise.Get("tune-estimator")->text;
-  if (noise.Has("init-scale")) d += ", started at " + noise.Get("init-scale")->text + " x the oracle";
+  if (noise.Has("init-scale"))
+    d += ", started at " + noise.Get("init-scale")->text + " x the oracle";
   const std::string per_run = noise.Has("tune-per-run") ? noise.Get("tune-per-run")->text : "";
   if (per_run == "true" || per_run == "yes" || per_run == "1")
     d += ", fitted in every run on its own measurements";

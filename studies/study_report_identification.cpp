@@ -184,8 +184,7 @@ std::vector<std::string> Reversals(const StudyTables& t, const std::vector<Case>
             e.noise->init_scale == ml.noise->init_scale && SignificantlyBetter(t, k, e, ml))
           out.push_back(where + ": " + e.noise->estimator + " (`" + e.label +
                         "`) filters better than maximum likelihood (`" + ml.label + "`), " +
-                        Sig(e.score, 4) + " against " + Sig(ml.score, 4) +
-                        DiffText(t, k, e, ml) +
+                        Sig(e.score, 4) + " against " + Sig(ml.score, 4) + DiffText(t, k, e, ml) +
                         ": the likelihood optimum is not the RMSE optimum of a filter whose "
                         "model is wrong.");
     }
@@ -317,10 +316,10 @@ std::string IdentificationCsv(const StudyConfig& config, const StudyTables& tabl
   using namespace study_report;
   if (!config.identification) return "";
   std::string csv = FormatCsvRow(
-      {"scenario", "kind", "setting", "filter", "noise", "per_run", "runs", "score", "score_lo",
-       "score_hi", "mean_nees", "nees_in95", "q_err_median", "q_err_p2_5", "q_err_p97_5",
-       "r_err_median", "r_err_p2_5", "r_err_p97_5", "failed", "at_bound", "not_converged",
-       "iterations", "cost_s"});
+      {"scenario",     "kind",       "setting",       "filter",       "noise",      "per_run",
+       "runs",         "score",      "score_lo",      "score_hi",     "mean_nees",  "nees_in95",
+       "q_err_median", "q_err_p2_5", "q_err_p97_5",   "r_err_median", "r_err_p2_5", "r_err_p97_5",
+       "failed",       "at_bound",   "not_converged", "iterations",   "cost_s"});
   auto num = [](double v) { return std::isfinite(v) ? FormatDouble(v) : std::string(); };
   // A statistic of the runs, "" when there are none (settings not tuned per run).
   auto stat = [&](const MetricStats& s, double MetricStats::*field) {
@@ -332,16 +331,29 @@ std::string IdentificationCsv(const StudyConfig& config, const StudyTables& tabl
   for (const Case& k : Cases(config, tables))
     for (const Entry& e : k.entries) {
       const bool ci = e.vs_oracle.n > 1;
-      csv += FormatCsvRow(
-          {k.sc->name, k.kind, e.label, e.fn.filter, e.fn.noise, e.per_run ? "1" : "0",
-           std::to_string(e.runs), num(e.score), ci ? num(1.0 + e.vs_oracle.ci95_lo) : "",
-           ci ? num(1.0 + e.vs_oracle.ci95_hi) : "", stat(e.nees, &MetricStats::mean), stat(e.nees_in95, &MetricStats::mean),
-           stat(e.q_err, &MetricStats::median), stat(e.q_err, &MetricStats::p2_5),
-           stat(e.q_err, &MetricStats::p97_5), stat(e.r_err, &MetricStats::median),
-           stat(e.r_err, &MetricStats::p2_5), stat(e.r_err, &MetricStats::p97_5),
-           e.per_run && e.runs ? num(double(e.tune_failed) / double(e.runs)) : "",
-           rate(e.at_bound, false), rate(e.converged, true), stat(e.iterations, &MetricStats::mean),
-           num(e.cost_s)});
+      csv += FormatCsvRow({k.sc->name,
+                           k.kind,
+                           e.label,
+                           e.fn.filter,
+                           e.fn.noise,
+                           e.per_run ? "1" : "0",
+                           std::to_string(e.runs),
+                           num(e.score),
+                           ci ? num(1.0 + e.vs_oracle.ci95_lo) : "",
+                           ci ? num(1.0 + e.vs_oracle.ci95_hi) : "",
+                           stat(e.nees, &MetricStats::mean),
+                           stat(e.nees_in95, &MetricStats::mean),
+                           stat(e.q_err, &MetricStats::median),
+                           stat(e.q_err, &MetricStats::p2_5),
+                           stat(e.q_err, &MetricStats::p97_5),
+                           stat(e.r_err, &MetricStats::median),
+                           stat(e.r_err, &MetricStats::p2_5),
+                           stat(e.r_err, &MetricStats::p97_5),
+                           e.per_run && e.runs ? num(double(e.tune_failed) / double(e.runs)) : "",
+                           rate(e.at_bound, false),
+                           rate(e.converged, true),
+                           stat(e.iterations, &MetricStats::mean),
+                           num(e.cost_s)});
     }
   return csv;
 }

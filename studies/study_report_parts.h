@@ -65,8 +65,7 @@ void RecordedDataSection(std::ostringstream& md, const StudyConfig& c, const Stu
 // the identified Q/R's errors, failures and cost; a ranking over the
 // scenarios; a sentence for each result that reverses common wisdom.
 // Nothing unless the study has tune-per-run settings.
-void NoiseIdentificationSection(std::ostringstream& md, const StudyConfig& c,
-                                const StudyTables& t);
+void NoiseIdentificationSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t);
 
 }  // namespace estlab::study_report
 
