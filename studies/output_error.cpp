@@ -14,7 +14,6 @@
 namespace estlab {
 namespace {
 
-
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
   if (d.t.size() < 2) throw InputError(d.path + ": output-error needs at least two rows");

@@ -209,7 +209,13 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
             continue;
           sc.combos.push_back(
               BuildCombo(sc, v, int(fi), filter_values[fi], int(ni), noise_values[ni], err));
-          c.identification |= sc.combos.back().tune_per_run;
+          if (sc.combos.back().tune_per_run) {
+            c.identification = true;
+            for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+              if (std::find(c.identification_outputs.begin(), c.identification_outputs.end(), o) ==
+                  c.identification_outputs.end())
+                c.identification_outputs.push_back(o);
+          }
         }
       }
       if (sc.combos.empty())

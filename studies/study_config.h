@@ -279,6 +279,9 @@ struct StudyConfig {
   // Some noise setting has tune-per-run = true: runs.csv and timing.csv get
   // the identification columns (study_results.h), the report its section.
   bool identification = false;
+  // With identification: the union of the measured outputs of the scenarios
+  // with tune-per-run settings (the id_r_OUTPUT columns of runs.csv).
+  std::vector<std::string> identification_outputs;
 };
 
 // Reads and validates `path` completely (every FilterSpec is built and every

@@ -16,6 +16,15 @@ double RelativeFrobeniusError(const std::vector<double>& a, const std::vector<do
   return norm > 0.0 ? std::sqrt(diff / norm) : std::numeric_limits<double>::quiet_NaN();
 }
 
+std::vector<double> DiagonalRatios(const std::vector<double>& a, const std::vector<double>& b) {
+  const size_t n = size_t(std::lround(std::sqrt(double(b.size()))));
+  std::vector<double> out(n, std::numeric_limits<double>::quiet_NaN());
+  if (a.size() != b.size() || n * n != b.size()) return out;
+  for (size_t i = 0; i < n; ++i)
+    if (b[i * n + i] != 0.0) out[i] = a[i * n + i] / b[i * n + i];
+  return out;
+}
+
 RunIdentification IdentifyInRun(const ScenarioConfig& sc, const Combo& combo,
                                 const FilterData& data, uint64_t seed) {
   RunIdentification id;
@@ -36,8 +45,14 @@ RunIdentification IdentifyInRun(const ScenarioConfig& sc, const Combo& combo,
   id.iterations = r.iterations;
   id.converged = r.status == TuneStatus::kConverged;
   for (bool b : r.at_bound) id.at_bound = id.at_bound || b;
-  if (options.q_param != NoiseParam::kFixed) id.q_err = RelativeFrobeniusError(r.q, sc.oracle_q);
-  if (options.r_param != NoiseParam::kFixed) id.r_err = RelativeFrobeniusError(r.r, sc.oracle_r);
+  if (options.q_param != NoiseParam::kFixed) {
+    id.q_err = RelativeFrobeniusError(r.q, sc.oracle_q);
+    id.q_ratio = DiagonalRatios(r.q, sc.oracle_q);
+  }
+  if (options.r_param != NoiseParam::kFixed) {
+    id.r_err = RelativeFrobeniusError(r.r, sc.oracle_r);
+    id.r_ratio = DiagonalRatios(r.r, sc.oracle_r);
+  }
   return id;
 }
 

@@ -37,6 +37,7 @@ struct Entry {
   MetricStats vs_oracle;  // paired score differences entry - oracle
   MetricStats nees, nees_in95, q_err, r_err, iterations, converged, at_bound;
   double cost_s = NAN;  // mean wall time per run: identification + filter
+  const GroupValues* group = nullptr;
 };
 
 struct Case {
@@ -56,6 +57,7 @@ Entry MakeEntry(const StudyConfig& c, const StudyTables& t, const ScenarioConfig
   e.label = cb.spec.adapt.rule.empty() ? e.fn.noise : cb.spec.adapt.rule + " from " + e.fn.noise;
   e.per_run = cb.tune_per_run;
   const GroupValues* g = FindGroup(t, GroupKey(sc.name, e.fn.filter, e.fn.noise));
+  e.group = g;
   if (g == nullptr) return e;
   e.runs = g->runs;
   e.tune_failed = g->tune_failed;
@@ -135,6 +137,33 @@ std::string DiffText(const StudyTables& t, const Case& k, const Entry& b, const 
          Sig(d.ci95_hi, 3) + "], " + std::to_string(d.n) + " runs)";
 }
 
+// Per diagonal element of Q and R, identified / true variance over the runs
+// of the per-run settings: bias shows as a median away from 1.
+void ElementTable(std::ostringstream& md, const Case& k) {
+  std::vector<const Entry*> rows;
+  for (const Entry& e : k.entries)
+    if (e.per_run && e.group != nullptr) rows.push_back(&e);
+  if (rows.empty()) return;
+  std::vector<std::string> columns;
+  for (const auto& st : k.sc->model->states) columns.push_back("id_q_" + st);
+  for (const auto& o : k.sc->model->FindMeasurement(k.sc->truth.measurement).outputs)
+    columns.push_back("id_r_" + o);
+  md << "Identified / true variance per element, median [2.5 %, 97.5 %] over the runs:\n\n"
+     << "| setting | filter |";
+  for (const auto& col : columns)
+    md << " " << (col[3] == 'q' ? "Q " : "R ") << col.substr(5) << " |";
+  md << "\n|---|---|";
+  for (size_t i = 0; i < columns.size(); ++i) md << "---|";
+  md << "\n";
+  for (const Entry* e : rows) {
+    md << "| `" << e->label << "` | " << e->fn.filter << " |";
+    for (const auto& col : columns)
+      md << " " << Spread(ComputeStats(Values(e->group, col))) << " |";
+    md << "\n";
+  }
+  md << "\n";
+}
+
 void CaseTable(std::ostringstream& md, const Case& k) {
   md << "### `" << k.sc->name << "`, " << k.kind << " (reference `" << k.oracle.filter << "/"
      << k.oracle.noise << "`)\n\n"
@@ -154,6 +183,7 @@ void CaseTable(std::ostringstream& md, const Case& k) {
        << (std::isfinite(e.cost_s) ? Sig(1e3 * e.cost_s, 3) + " ms" : "–") << " |\n";
   }
   md << "\n";
+  ElementTable(md, k);
 }
 
 // One sentence per result that goes against what is commonly assumed.

@@ -34,14 +34,21 @@ std::vector<std::string> RunsColumns(const StudyConfig& config) {
     for (const auto& o : config.output_columns) c.push_back("pred_rmse_" + o);
   }
   if (config.identification)
-    for (const auto& id : IdentificationColumns()) c.push_back(id);
+    for (const auto& id : IdentificationColumns(config)) c.push_back(id);
   c.push_back("steps");
   c.push_back("message");
   return c;
 }
 
-std::vector<std::string> IdentificationColumns() {
+std::vector<std::string> IdentificationFitColumns() {
   return {"id_q_err", "id_r_err", "id_iterations", "id_converged", "id_at_bound"};
+}
+
+std::vector<std::string> IdentificationColumns(const StudyConfig& config) {
+  std::vector<std::string> c = IdentificationFitColumns();
+  for (const auto& s : config.state_columns) c.push_back("id_q_" + s);
+  for (const auto& o : config.identification_outputs) c.push_back("id_r_" + o);
+  return c;
 }
 
 std::vector<std::string> StepsColumns(const StudyConfig& config) {
@@ -493,8 +500,12 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
         const auto it = tables.groups.find(GroupKey(sc.name, f, n));
         if (it == tables.groups.end()) continue;
         std::vector<std::string> combo_metrics = metrics;
-        if (cb.tune_per_run)
-          for (const auto& id : IdentificationColumns()) combo_metrics.push_back(id);
+        if (cb.tune_per_run) {
+          for (const auto& id : IdentificationFitColumns()) combo_metrics.push_back(id);
+          for (const auto& st : sc.model->states) combo_metrics.push_back("id_q_" + st);
+          for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+            combo_metrics.push_back("id_r_" + o);
+        }
         for (const auto& metric : combo_metrics) {
           const MetricStats s = ComputeStats(it->second.values[metric]);
           out.stream() << FormatCsvRow({sc.name, f, n, metric, std::to_string(it->second.runs),

@@ -43,9 +43,14 @@ std::vector<std::string> TimingColumns(const StudyConfig& config);
 //   id_iterations       optimiser / EM iterations
 //   id_converged        1 when the tuner converged, 0 when it stopped at its limit
 //   id_at_bound         1 when an estimate ended at (or near) its search bound
+//   id_q_STATE          per element: Q^_ii / Q_ii, the identified over the true
+//                       variance of each state (state_columns)
+//   id_r_OUTPUT         R^_jj / R_jj of each output (identification_outputs)
 // A run whose tuning failed has status tune_failed. timing.csv gets
 // identify_wall_s, the tuner's wall time in that run.
-std::vector<std::string> IdentificationColumns();
+std::vector<std::string> IdentificationColumns(const StudyConfig& config);
+// The first five of them (the per-element ones follow).
+std::vector<std::string> IdentificationFitColumns();
 
 // A CSV row file written run by run: the header and the rows, with a partial
 // last line (an interrupted write) dropped. Throws InputError when the

@@ -215,14 +215,23 @@ void AppendNoTruthMetrics(const StudyConfig& c, const ScenarioConfig& sc, bool r
 
 // The IdentificationColumns of a runs.csv row: empty unless the combo
 // tunes per run and its tuner gave a result.
-void AppendIdentification(const Combo& cb, const RunIdentification& id,
-                          std::vector<std::string>* row) {
+void AppendIdentification(const StudyConfig& c, const ScenarioConfig& sc, const Combo& cb,
+                          const RunIdentification& id, std::vector<std::string>* row) {
   const bool has = cb.tune_per_run && id.failure.empty();
   row->push_back(has ? Full(id.q_err) : "");
   row->push_back(has ? Full(id.r_err) : "");
   row->push_back(has ? std::to_string(id.iterations) : "");
   row->push_back(has ? (id.converged ? "1" : "0") : "");
   row->push_back(has ? (id.at_bound ? "1" : "0") : "");
+  auto element = [&](const std::vector<std::string>& names, const std::string& name,
+                     const std::vector<double>& ratios) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    const size_t i = size_t(it - names.begin());
+    row->push_back(has && it != names.end() && i < ratios.size() ? Full(ratios[i]) : "");
+  };
+  for (const auto& s : c.state_columns) element(sc.model->states, s, id.q_ratio);
+  const auto& outputs = sc.model->FindMeasurement(sc.truth.measurement).outputs;
+  for (const auto& o : c.identification_outputs) element(outputs, o, id.r_ratio);
 }
 
 // Run `run` of a scenario: its simulated truth and measurements, or its
@@ -315,7 +324,7 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     row.push_back(ran ? inside(mean_nis, nis_bounds) : "");
     row.push_back(ran ? Full(sum.loglik) : "");
     if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
-    if (c.identification) AppendIdentification(cb, id, &row);
+    if (c.identification) AppendIdentification(c, sc, cb, id, &row);
     row.push_back(std::to_string(sum.steps));
     row.push_back(message);
     text.runs += FormatCsvRow(row);

@@ -46,10 +46,13 @@ Examples:
   estlab study studies/paper003_double_pendulum_sweep.ini --out results/p003 --slurm 10 \
       --jobs 4 --slurm-opts "--partition=short --time=01:00:00"
   estlab study --status results/p003
+  # Every Q/R estimator, identified in each run (tune-per-run), 100 runs per scenario:
+  estlab study studies/noise_identification.ini --out results/ni --runs 100 --jobs 2
 
 Output folder: runs.csv (a row per scenario, run, filter and noise setting),
 summary.csv, time_metrics.csv, steps.csv, timing.csv, timeseries/ (kept runs),
-report.md, manifest.json. runs.csv and summary.csv do not depend on --jobs or
+report.md, manifest.json; identification.csv with tune-per-run noise settings.
+runs.csv and summary.csv do not depend on --jobs or
 --shard. Ctrl-C (or SIGTERM) stops taking new runs, writes the finished ones
 and exits 130 (143); the same command again resumes.
 Exit status: 0 done (filter runs that failed numerically are results: their
@@ -332,8 +335,9 @@ int RunStudyCommand(const std::vector<std::string>& args) {
     std::cout << " in " << std::setprecision(3) << sum.wall_s << " s";
     if (sum.failed_filter_runs)
       std::cout << "; " << sum.failed_filter_runs << " filter runs failed (status in runs.csv)";
-    std::cout << "\nwrote " << options.out_dir << "/{runs,summary,time_metrics}.csv, report.md, "
-              << "manifest.json\n";
+    const bool identification = std::filesystem::exists(options.out_dir + "/identification.csv");
+    std::cout << "\nwrote " << options.out_dir << "/{runs,summary,time_metrics"
+              << (identification ? ",identification" : "") << "}.csv, report.md, manifest.json\n";
   }
   return 0;
 }

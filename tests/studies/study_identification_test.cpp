@@ -29,6 +29,10 @@ TEST(StudyIdentification, RelativeFrobeniusErrorByHand) {
   EXPECT_TRUE(std::isnan(RelativeFrobeniusError({}, {})));
   EXPECT_TRUE(std::isnan(RelativeFrobeniusError({1.0}, {1.0, 0.0})));
   EXPECT_TRUE(std::isnan(RelativeFrobeniusError({1.0}, {0.0})));
+  const std::vector<double> ratios = DiagonalRatios({2, 5, 5, 3}, {4, 1, 1, 0});
+  ASSERT_EQ(ratios.size(), 2u);
+  EXPECT_EQ(ratios[0], 0.5);
+  EXPECT_TRUE(std::isnan(ratios[1]));  // a zero true variance
 }
 
 // Pendulum, white-acceleration truth qc = 0.5 and R = 0.01, EKF: the oracle,
@@ -119,6 +123,10 @@ TEST_F(StudyIdentificationCli, EachRunIdentifiesWhatEstlabTuneFindsOnItsData) {
     // White acceleration: Q^ - Q = (qc^ - qc) Q_wa, so the error is |qc^/qc - 1|.
     EXPECT_NEAR(std::stod(row->at("id_q_err")), std::abs(qc / 0.5 - 1.0), 1e-6) << c.noise;
     EXPECT_NEAR(std::stod(row->at("id_r_err")), std::abs(rv / 0.01 - 1.0), 1e-6) << c.noise;
+    // Per element: white acceleration scales both variances by qc^ / qc.
+    EXPECT_NEAR(std::stod(row->at("id_q_theta")), qc / 0.5, 1e-6) << c.noise;
+    EXPECT_NEAR(std::stod(row->at("id_q_omega")), qc / 0.5, 1e-6) << c.noise;
+    EXPECT_NEAR(std::stod(row->at("id_r_sin_theta")), rv / 0.01, 1e-6) << c.noise;
     EXPECT_EQ(row->at("id_at_bound"), "0");
     EXPECT_GT(std::stoi(row->at("id_iterations")), 0);
   }
@@ -167,7 +175,8 @@ TEST_F(StudyIdentificationCli, ScoresFollowFromRunsCsvAndJobsChangeNothing) {
   const std::string report = ReadFile(dir_.File("j1/report.md"));
   for (const char* s : {"## Noise identification", "### Ranking over the scenarios",
                         "### Results against common wisdom", "### Robustness",
-                        "### `pend`, ekf (reference `ekf/oracle`)", "| `ml-x0_01` |"})
+                        "### `pend`, ekf (reference `ekf/oracle`)", "| `ml-x0_01` |",
+                        "| setting | filter | Q theta | Q omega | R sin_theta |"})
     EXPECT_NE(report.find(s), std::string::npos) << s;
   // The hand-vs-auto section is about settings tuned once, not these.
   EXPECT_EQ(report.find("## Hand-tuned vs auto-tuned"), std::string::npos);
