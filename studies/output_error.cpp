@@ -14,6 +14,7 @@
 namespace estlab {
 namespace {
 
+
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
   if (d.t.size() < 2) throw InputError(d.path + ": output-error needs at least two rows");

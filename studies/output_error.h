@@ -40,7 +40,7 @@ namespace estlab {
 struct OutputErrorOptions {
   double horizon = 0.5;  // s; the window length
   int max_iterations = 100;
-  double theta_step = 1e-6;   // central differences in theta
+  double theta_step = 1e-6;  // central differences in theta
   double bound_width = 20.0;  // log parameters within initial +- this (adaptive/theta_scale.h)
   bool IsValid(std::string* error) const;
 };
