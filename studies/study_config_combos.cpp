@@ -161,6 +161,10 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     });
     if (!(q_tuned && q_oracle) && !(r_tuned && r_oracle))
       noise.Fail("init-scale", "scales the oracle start of q = tuned or r = tuned (no init-* key)");
+    if ((q_tuned && !q_oracle) || (r_tuned && !r_oracle))
+      noise.Fail("init-scale",
+                 "scales the oracle start: every tuned side must start from the oracle (drop the "
+                 "init-* key)");
     if (q_tuned && q_oracle) {
       spec.qc *= scale;
       for (double& x : spec.q) x *= scale;
@@ -260,6 +264,8 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     combo.tune_per_run = noise.Has("tune-per-run") &&
                          Checked(*noise.Get("tune-per-run"), err,
                                  [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
+    if (combo.tune_per_run && !q_tuned && !r_tuned)
+      noise.Fail("tune-per-run", "identifies Q/R: it needs q = tuned or r = tuned");
     if (combo.tune_per_run && sc.recorded)
       noise.Fail("tune-per-run",
                  "applies to simulated scenarios: [" + sc.section +

@@ -23,22 +23,22 @@ struct Rows {
 };
 
 // Score [95 % CI] against cost, a labelled point per setting, a colour per
-// filter kind (one .dat block each).
+// case (its reference filter; one .dat block each).
 void ScoreCostFigure(const Rows& r, const std::string& scenario, const std::string& folder,
                      const std::string& term, std::vector<std::string>* scripts) {
   GnuplotFigure fig(folder, scenario + "_score_cost");
   std::vector<std::string> kinds;
   for (const auto& row : r.csv.rows)
     if (row[0] == scenario &&
-        std::find(kinds.begin(), kinds.end(), r.Get(row, "kind")) == kinds.end())
-      kinds.push_back(r.Get(row, "kind"));
+        std::find(kinds.begin(), kinds.end(), r.Get(row, "case")) == kinds.end())
+      kinds.push_back(r.Get(row, "case"));
   for (const auto& kind : kinds) {
     fig.dat() << "# " << kind << ": cost_s score score_lo score_hi \"setting\"\n";
     for (const auto& row : r.csv.rows)
-      if (row[0] == scenario && r.Get(row, "kind") == kind)
+      if (row[0] == scenario && r.Get(row, "case") == kind)
         fig.dat() << DatValue(r.Get(row, "cost_s")) << " " << DatValue(r.Get(row, "score")) << " "
                   << DatValue(r.Get(row, "score_lo")) << " " << DatValue(r.Get(row, "score_hi"))
-                  << " \"" << r.Get(row, "setting") << "\"\n";
+                  << " \"" << r.Get(row, "filter") << " " << r.Get(row, "setting") << "\"\n";
     fig.dat() << "\n\n";
   }
   const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd"};
@@ -72,7 +72,7 @@ void ErrorFigure(const Rows& r, const std::string& scenario, const std::string& 
     const std::string w = which;
     fig.dat() << "# " << w << ": index label median p2_5 p97_5\n";
     for (size_t k = 0; k < rows.size(); ++k) {
-      const std::string label = r.Get(*rows[k], "kind") + " " + r.Get(*rows[k], "setting");
+      const std::string label = r.Get(*rows[k], "filter") + " " + r.Get(*rows[k], "setting");
       longest = std::max(longest, label.size());
       fig.dat() << k << " \"" << label << "\" " << DatValue(r.Get(*rows[k], w + "_err_median"))
                 << " " << DatValue(r.Get(*rows[k], w + "_err_p2_5")) << " "
@@ -81,18 +81,28 @@ void ErrorFigure(const Rows& r, const std::string& scenario, const std::string& 
     fig.dat() << "\n\n";
   }
   auto& b = fig.body();
-  b << "  set multiplot layout 2,1 title "
+  // A side no setting tunes has no finite value: no panel (a log axis
+  // without data stops gnuplot).
+  const char* labels[] = {"relative Frobenius error of Q", "relative Frobenius error of R"};
+  std::vector<int> panels;
+  for (int i = 0; i < 2; ++i) {
+    const std::string column = std::string(i == 0 ? "q" : "r") + "_err_median";
+    bool any = false;
+    for (const auto* row : rows) any = any || !r.Get(*row, column).empty();
+    if (any) panels.push_back(i);
+  }
+  if (panels.empty()) return;
+  b << "  set multiplot layout " << panels.size() << ",1 title "
     << GnuplotText(scenario + ": identified noise vs the truth's, median and 2.5-97.5 % of runs")
     << "\n  set yrange [" << double(rows.size()) - 0.5 << ":-0.5]\n  set lmargin " << longest + 3
     << "\n  unset key\n  set ytics noenhanced\n"
     << GnuplotLogAxis("x");
-  const char* labels[] = {"relative Frobenius error of Q", "relative Frobenius error of R"};
-  for (int i = 0; i < 2; ++i)
+  for (int i : panels)
     b << "  set xlabel '" << labels[i] << "'\n  plot " << GnuplotQuote(fig.dat_name()) << " index "
       << i << " using 3:1:4:5:ytic(2) with xerrorbars pt 7 ps 1.2 lc rgb '#d62728'\n";
   b << "  unset multiplot\n";
   const int panel = 22 * int(rows.size()) + 90;
-  scripts->push_back(fig.Write(term, 900, 2 * panel + 40));
+  scripts->push_back(fig.Write(term, 900, int(panels.size()) * panel + 40));
 }
 
 }  // namespace

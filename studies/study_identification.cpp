@@ -28,6 +28,7 @@ std::vector<double> DiagonalRatios(const std::vector<double>& a, const std::vect
 RunIdentification IdentifyInRun(const ScenarioConfig& sc, const Combo& combo,
                                 const FilterData& data, uint64_t seed) {
   RunIdentification id;
+  id.attempted = true;
   TunerOptions options = combo.tuner;
   options.seed = seed;
   options.compute_std_errors = false;  // a Hessian per run, and nothing here uses it

@@ -29,8 +29,9 @@
 namespace estlab {
 
 struct RunIdentification {
-  std::string failure;  // "" when the tuner gave a usable Q/R
-  FilterSpec spec;      // the combo's spec with the identified Q/R
+  bool attempted = false;  // the tuner ran (not when the run's truth failed)
+  std::string failure;     // "" when the tuner gave a usable Q/R
+  FilterSpec spec;         // the combo's spec with the identified Q/R
   double q_err = std::numeric_limits<double>::quiet_NaN();  // NaN: Q not tuned
   double r_err = std::numeric_limits<double>::quiet_NaN();  // NaN: R not tuned
   // Per element: identified over true variance, Q^_ii / Q_ii and R^_jj / R_jj

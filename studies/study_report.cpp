@@ -92,11 +92,14 @@ void TunedTable(std::ostringstream& md, const StudyTables& t, const ScenarioConf
       sc.oracle_q_white_accel ? "qc " + FormatNumber(sc.oracle_qc) : DiagText(sc.oracle_q, n);
   const int m = int(sc.truth.meas_noise_var.size());
   if (sc.recorded)
-    md << "\nTuned noise (maximum innovation likelihood on the scenario's " << sc.tune_runs.size()
+    md << "\nTuned noise (the noise setting's estimator, maximum likelihood unless it says "
+          "otherwise, on the scenario's "
+       << sc.tune_runs.size()
        << " tune-data files, then fixed for every run; recorded data: the true noise is "
           "unknown):\n\n";
   else
-    md << "\nTuned noise (maximum innovation likelihood on the scenario's own tuning "
+    md << "\nTuned noise (the noise setting's estimator, maximum likelihood unless it says "
+          "otherwise, on the scenario's own tuning "
           "trajectories, then fixed for every run); the truth has Q "
        << oracle_q << ", R " << DiagText(sc.oracle_r, m) << ":\n\n";
   md << "| filter | noise | status | Q | R | NLL start → tuned | iterations |\n"

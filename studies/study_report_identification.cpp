@@ -13,6 +13,7 @@
 // the best contains 0.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <set>
 
@@ -49,6 +50,12 @@ struct Case {
 
 double Mean(const std::vector<double>& v) { return ComputeStats(v).mean; }
 
+// The start of a tuned setting as a multiple of the oracle (1 without
+// init-scale; the config check refuses init-scale with init-* keys).
+double InitScale(const NoiseConfig& n) {
+  return n.init_scale.empty() ? 1.0 : std::strtod(n.init_scale.c_str(), nullptr);
+}
+
 Entry MakeEntry(const StudyConfig& c, const StudyTables& t, const ScenarioConfig& sc,
                 const Combo& cb, const FilterNoise& oracle) {
   Entry e;
@@ -76,32 +83,43 @@ Entry MakeEntry(const StudyConfig& c, const StudyTables& t, const ScenarioConfig
   return e;
 }
 
+// One case per scenario with a truth and non-adaptive filter that runs the
+// oracle; an adaptive filter joins the case of the first such filter of its
+// kind (its rule starts from the same model and noise).
 std::vector<Case> Cases(const StudyConfig& c, const StudyTables& t) {
   std::vector<Case> cases;
   for (const ScenarioConfig& sc : c.scenarios) {
     if (!sc.has_truth) continue;
-    std::vector<std::string> kinds;
+    const size_t first = cases.size();
+    for (const Combo& cb : sc.combos)
+      if (cb.spec.adapt.rule.empty() && c.noises[cb.noise].role == "oracle") {
+        bool known = false;
+        for (size_t i = first; i < cases.size(); ++i)
+          known = known || cases[i].oracle.filter == c.filters[cb.filter].name;
+        if (known) continue;
+        Case k;
+        k.sc = &sc;
+        k.kind = FilterKindName(cb.spec.kind());
+        k.oracle = {c.filters[cb.filter].name, c.noises[cb.noise].name};
+        cases.push_back(std::move(k));
+      }
     for (const Combo& cb : sc.combos) {
+      const std::string& filter = c.filters[cb.filter].name;
       const std::string kind = FilterKindName(cb.spec.kind());
-      if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) kinds.push_back(kind);
-    }
-    for (const std::string& kind : kinds) {
-      Case k;
-      k.sc = &sc;
-      k.kind = kind;
-      for (const Combo& cb : sc.combos)
-        if (k.oracle.filter.empty() && FilterKindName(cb.spec.kind()) == kind &&
-            cb.spec.adapt.rule.empty() && c.noises[cb.noise].role == "oracle")
-          k.oracle = {c.filters[cb.filter].name, c.noises[cb.noise].name};
-      if (k.oracle.filter.empty()) continue;
-      for (const Combo& cb : sc.combos)
-        if (FilterKindName(cb.spec.kind()) == kind)
+      for (size_t i = first; i < cases.size(); ++i) {
+        Case& k = cases[i];
+        const bool own = k.oracle.filter == filter;
+        if (own || (!cb.spec.adapt.rule.empty() && k.kind == kind)) {
           k.entries.push_back(MakeEntry(c, t, sc, cb, k.oracle));
-      std::stable_sort(k.entries.begin(), k.entries.end(), [](const Entry& a, const Entry& b) {
-        return std::isfinite(a.score) && !(a.score >= b.score);
-      });
-      cases.push_back(std::move(k));
+          break;
+        }
+      }
     }
+    for (size_t i = first; i < cases.size(); ++i)
+      std::stable_sort(cases[i].entries.begin(), cases[i].entries.end(),
+                       [](const Entry& a, const Entry& b) {
+                         return std::isfinite(a.score) && !(a.score >= b.score);
+                       });
   }
   return cases;
 }
@@ -128,6 +146,14 @@ bool SignificantlyBetter(const StudyTables& t, const Case& k, const Entry& b, co
   if (!std::isfinite(a.score) || !std::isfinite(b.score)) return false;
   const MetricStats d = PairedScoreDifference(t, *k.sc, b.fn, a.fn, k.oracle);
   return d.n > 1 && d.ci95_hi < 0.0;
+}
+
+// True when the 95 % CI of the paired difference b - a contains 0 (over at
+// least two shared runs).
+bool TiedWith(const StudyTables& t, const Case& k, const Entry& b, const Entry& a) {
+  if (!std::isfinite(a.score) || !std::isfinite(b.score)) return false;
+  const MetricStats d = PairedScoreDifference(t, *k.sc, b.fn, a.fn, k.oracle);
+  return d.n > 1 && d.ci95_lo <= 0.0 && d.ci95_hi >= 0.0;
 }
 
 // The paired interval of b - a, in score units: " (difference -0.02 [-0.03, -0.01])".
@@ -165,8 +191,8 @@ void ElementTable(std::ostringstream& md, const Case& k) {
 }
 
 void CaseTable(std::ostringstream& md, const Case& k) {
-  md << "### `" << k.sc->name << "`, " << k.kind << " (reference `" << k.oracle.filter << "/"
-     << k.oracle.noise << "`)\n\n"
+  md << "### `" << k.sc->name << "`, " << k.oracle.filter << " (" << k.kind << "; reference `"
+     << k.oracle.filter << "/" << k.oracle.noise << "`)\n\n"
      << "| rank | setting | filter | score [95 % CI] | ANEES | NEES in 95 % | Q error | R error "
         "| failed | at bound | not converged | iterations | cost per run |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -190,7 +216,7 @@ void CaseTable(std::ostringstream& md, const Case& k) {
 std::vector<std::string> Reversals(const StudyTables& t, const std::vector<Case>& cases) {
   std::vector<std::string> out;
   for (const Case& k : cases) {
-    const std::string where = "`" + k.sc->name + "` (" + k.kind + ")";
+    const std::string where = "`" + k.sc->name + "` (" + k.oracle.filter + ")";
     const Entry* oracle = nullptr;
     for (const Entry& e : k.entries)
       if (e.fn.filter == k.oracle.filter && e.fn.noise == k.oracle.noise) oracle = &e;
@@ -211,7 +237,7 @@ std::vector<std::string> Reversals(const StudyTables& t, const std::vector<Case>
       if (!ml.per_run || ml.noise->estimator != "ml") continue;
       for (const Entry& e : k.entries)
         if (e.per_run && e.noise->estimator != "ml" && e.fn.filter == ml.fn.filter &&
-            e.noise->init_scale == ml.noise->init_scale && SignificantlyBetter(t, k, e, ml))
+            InitScale(*e.noise) == InitScale(*ml.noise) && SignificantlyBetter(t, k, e, ml))
           out.push_back(where + ": " + e.noise->estimator + " (`" + e.label +
                         "`) filters better than maximum likelihood (`" + ml.label + "`), " +
                         Sig(e.score, 4) + " against " + Sig(ml.score, 4) + DiffText(t, k, e, ml) +
@@ -255,7 +281,7 @@ void SummaryRanking(std::ostringstream& md, const StudyTables& t, const std::vec
       Acc& a = acc[e.label];
       ++a.cases;
       a.scores.push_back(e.score);
-      if (&e == &best || (std::isfinite(e.score) && !SignificantlyBetter(t, k, best, e))) ++a.best;
+      if (&e == &best || TiedWith(t, k, best, e)) ++a.best;
       if (e.q_err.n) a.q_med.push_back(e.q_err.median);
       if (e.r_err.n) a.r_med.push_back(e.r_err.median);
       a.cost.push_back(e.cost_s);
@@ -346,10 +372,10 @@ std::string IdentificationCsv(const StudyConfig& config, const StudyTables& tabl
   using namespace study_report;
   if (!config.identification) return "";
   std::string csv = FormatCsvRow(
-      {"scenario",     "kind",       "setting",       "filter",       "noise",      "per_run",
-       "runs",         "score",      "score_lo",      "score_hi",     "mean_nees",  "nees_in95",
-       "q_err_median", "q_err_p2_5", "q_err_p97_5",   "r_err_median", "r_err_p2_5", "r_err_p97_5",
-       "failed",       "at_bound",   "not_converged", "iterations",   "cost_s"});
+      {"scenario",    "case",         "kind",       "setting",       "filter",       "noise",
+       "per_run",     "runs",         "score",      "score_lo",      "score_hi",     "mean_nees",
+       "nees_in95",   "q_err_median", "q_err_p2_5", "q_err_p97_5",   "r_err_median", "r_err_p2_5",
+       "r_err_p97_5", "failed",       "at_bound",   "not_converged", "iterations",   "cost_s"});
   auto num = [](double v) { return std::isfinite(v) ? FormatDouble(v) : std::string(); };
   // A statistic of the runs, "" when there are none (settings not tuned per run).
   auto stat = [&](const MetricStats& s, double MetricStats::*field) {
@@ -362,6 +388,7 @@ std::string IdentificationCsv(const StudyConfig& config, const StudyTables& tabl
     for (const Entry& e : k.entries) {
       const bool ci = e.vs_oracle.n > 1;
       csv += FormatCsvRow({k.sc->name,
+                           k.oracle.filter,
                            k.kind,
                            e.label,
                            e.fn.filter,

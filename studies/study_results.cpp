@@ -442,6 +442,9 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
   bool dropped = false;
 
   // Per-group values of every metric, runs with status ok only.
+  StudyState state;
+  ReadStudyState(dir, &state);
+  const long expected_runs = std::max(1L, long(state.runs));
   StudyTables tables;
   std::map<std::string, std::vector<char>> ok_runs;  // group -> ok flag per run index
   auto is_ok = [&](const std::string& g, long run) {
@@ -462,10 +465,18 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
       flags[size_t(run)] = 1;
     }
     ++gv.ok;
+    // Exact capacity (one value per run), not the doubling slack: memory
+    // grows by what the runs hold and no more (tests/perf/study_memory_test.cpp).
+    if (gv.run_index.empty()) gv.run_index.reserve(size_t(expected_runs));
     gv.run_index.push_back(run);
     for (size_t j = 6; j + 1 < runs_cols.size(); ++j) {
       if (runs_cols[j] == "steps") continue;
-      gv.values[runs_cols[j]].push_back(ToDouble(r[j]));
+      // The identification columns of settings not tuned per run are empty:
+      // not kept (only their statistics are used, never aligned with runs).
+      if (r[j].empty() && runs_cols[j].rfind("id_", 0) == 0) continue;
+      std::vector<double>& v = gv.values[runs_cols[j]];
+      if (v.empty()) v.reserve(size_t(expected_runs));
+      v.push_back(ToDouble(r[j]));
     }
   });
   if (fs::exists(dir + "/tuned.csv")) tables.tuned = ReadCsvText(dir + "/tuned.csv");
@@ -583,8 +594,6 @@ std::string FinalizeStudy(const StudyConfig& config, const std::string& dir) {
     out.Commit();
   }
 
-  StudyState state;
-  ReadStudyState(dir, &state);
   const std::string identification = IdentificationCsv(config, tables);
   if (!identification.empty()) WriteTextFile(dir + "/identification.csv", identification);
   const std::string report = StudyReportMarkdown(config, tables, state);

@@ -217,7 +217,7 @@ void AppendNoTruthMetrics(const StudyConfig& c, const ScenarioConfig& sc, bool r
 // tunes per run and its tuner gave a result.
 void AppendIdentification(const StudyConfig& c, const ScenarioConfig& sc, const Combo& cb,
                           const RunIdentification& id, std::vector<std::string>* row) {
-  const bool has = cb.tune_per_run && id.failure.empty();
+  const bool has = cb.tune_per_run && id.attempted && id.failure.empty();
   row->push_back(has ? Full(id.q_err) : "");
   row->push_back(has ? Full(id.r_err) : "");
   row->push_back(has ? std::to_string(id.iterations) : "");
@@ -330,10 +330,12 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
     text.runs += FormatCsvRow(row);
 
     std::vector<std::string> timing = key;
-    timing.push_back(Sig6(sum.us_per_step));
-    timing.push_back(Sig6(sum.wall_s));
+    // No filter ran when the truth or the tuning failed: no filter cost.
+    const bool filtered = status != "truth_failed" && status != "tune_failed";
+    timing.push_back(filtered ? Sig6(sum.us_per_step) : "");
+    timing.push_back(filtered ? Sig6(sum.wall_s) : "");
     timing.push_back(Sig6(truth.wall_s));
-    if (c.identification) timing.push_back(cb.tune_per_run ? Sig6(id.wall_s) : "");
+    if (c.identification) timing.push_back(id.attempted ? Sig6(id.wall_s) : "");
     text.timing += FormatCsvRow(timing);
 
     // Per-step errors, every `every` steps and the last.

@@ -132,8 +132,8 @@ TEST(StudyMemory, FlatFrom1000To10000RunsAndUnder50MB) {
     std::ofstream(config) << PendulumStudy(n);
     const ChildRun r = RunStudyProcess(config, out, log);
     ASSERT_EQ(r.exit_status, 0) << "estlab study failed:\n" << ReadText(log);
-    // Every run of every filter was written: one header and 3 filters x n runs.
-    EXPECT_EQ(CountLines(out + "/runs.csv"), 1 + 3L * n);
+    // Every run of every combination was written: one header and 4 x n rows.
+    EXPECT_EQ(CountLines(out + "/runs.csv"), 1 + 4L * n);
     std::printf("  %5d runs: peak RSS %.1f MB, %.2f s\n", n, r.max_rss_kb / 1024.0, r.wall_s);
     runs.push_back(r);
   }

@@ -175,7 +175,7 @@ TEST_F(StudyIdentificationCli, ScoresFollowFromRunsCsvAndJobsChangeNothing) {
   const std::string report = ReadFile(dir_.File("j1/report.md"));
   for (const char* s : {"## Noise identification", "### Ranking over the scenarios",
                         "### Results against common wisdom", "### Robustness",
-                        "### `pend`, ekf (reference `ekf/oracle`)", "| `ml-x0_01` |",
+                        "### `pend`, ekf (ekf; reference `ekf/oracle`)", "| `ml-x0_01` |",
                         "| setting | filter | Q theta | Q omega | R sin_theta |"})
     EXPECT_NE(report.find(s), std::string::npos) << s;
   // The hand-vs-auto section is about settings tuned once, not these.
@@ -215,6 +215,9 @@ TEST(StudyIdentificationConfig, BadKeysNameTheirLine) {
       {"[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = true",
        "[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = true\ntune-datasets = 3",
        "[noise.ml] tune-datasets: with tune-per-run each run fits on its own measurements"},
+      {"[noise.ml-x0_01]\nq = tuned\nr = tuned\ninit-scale = 0.01",
+       "[noise.ml-x0_01]\nq = tuned\nr = tuned\ninit-r-diag = 0.02\ninit-scale = 0.01",
+       "[noise.ml-x0_01] init-scale: scales the oracle start: every tuned side must start from"},
       {"[noise.oracle]\nq = oracle\nr = oracle\n",
        "[noise.oracle]\nq = oracle\nr = oracle\ntune-per-run = true\n",
        "[noise.oracle] tune-per-run: applies only with q = tuned or r = tuned"},
