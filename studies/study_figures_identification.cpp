@@ -38,7 +38,7 @@ void ScoreCostFigure(const Rows& r, const std::string& scenario, const std::stri
       if (row[0] == scenario && r.Get(row, "case") == kind)
         fig.dat() << DatValue(r.Get(row, "cost_s")) << " " << DatValue(r.Get(row, "score")) << " "
                   << DatValue(r.Get(row, "score_lo")) << " " << DatValue(r.Get(row, "score_hi"))
-                  << " \"" << r.Get(row, "filter") << " " << r.Get(row, "setting") << "\"\n";
+                  << " \"" << r.Get(row, "setting") << "\"\n";
     fig.dat() << "\n\n";
   }
   const char* colors[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd"};
@@ -46,7 +46,7 @@ void ScoreCostFigure(const Rows& r, const std::string& scenario, const std::stri
   b << "  set title " << GnuplotText(scenario + ": score (1 = the truth's noise) vs cost per run")
     << "\n"
     << GnuplotLogAxis("x") << "  set xlabel 'mean wall time per run, identification + filter [s]'\n"
-    << "  set ylabel 'score [95 % CI]'\n  plot ";
+    << "  set logscale y\n  set ylabel 'score [95 % CI] (log scale)'\n  plot ";
   for (size_t i = 0; i < kinds.size(); ++i) {
     const std::string color = colors[i % 5];
     b << (i ? ", \\\n       " : "") << GnuplotQuote(fig.dat_name()) << " index " << i

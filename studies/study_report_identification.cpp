@@ -141,11 +141,16 @@ std::string ScoreCell(const Entry& e) {
          (d.n > 1 ? " [" + Sig(1.0 + d.ci95_lo, 4) + ", " + Sig(1.0 + d.ci95_hi, 4) + "]" : "");
 }
 
-// True when b is significantly better (lower score) than a.
+// A result worth a sentence: b's score is lower than a's by at least this
+// (1 % of the oracle's RMSE) and the difference is significant.
+constexpr double kMaterialDifference = 0.01;
+
+// True when b is better (lower score) than a, significantly (the 95 % CI of
+// the paired difference below 0) and materially (by kMaterialDifference).
 bool SignificantlyBetter(const StudyTables& t, const Case& k, const Entry& b, const Entry& a) {
   if (!std::isfinite(a.score) || !std::isfinite(b.score)) return false;
   const MetricStats d = PairedScoreDifference(t, *k.sc, b.fn, a.fn, k.oracle);
-  return d.n > 1 && d.ci95_hi < 0.0;
+  return d.n > 1 && d.ci95_hi < 0.0 && d.mean <= -kMaterialDifference;
 }
 
 // True when the 95 % CI of the paired difference b - a contains 0 (over at
@@ -358,7 +363,9 @@ void NoiseIdentificationSection(std::ostringstream& md, const StudyConfig& c,
         "and filter (this machine).\n\n";
   SummaryRanking(md, t, cases);
   const std::vector<std::string> reversals = Reversals(t, cases);
-  md << "### Results against common wisdom\n\n";
+  md << "### Results against common wisdom\n\n"
+     << "Differences that are significant (the 95 % CI of the paired difference excludes 0) "
+        "and at least 0.01 in score (1 % of the oracle's RMSE).\n\n";
   if (reversals.empty()) md << "None: no result here reverses the usual expectations.\n";
   for (const auto& r : reversals) md << "- " << r << "\n";
   md << "\n";
