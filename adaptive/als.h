@@ -380,6 +380,17 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     target.segment(j * M * M, M * M) /= counts[j];
     J.middleRows(j * M * M, M * M) /= counts[j];
   }
+  // In covariance units the residuals of a precise sensor (R ~ 1e-9 rad^2)
+  // are ~1e-9 and their gradient is below any absolute tolerance at the
+  // start: Levenberg-Marquardt would stop there, "converged", without a
+  // step. Dividing by the norm of the data's lag-0 autocovariance (the
+  // innovation covariance) makes the problem scale-free; the minimiser is
+  // the same.
+  const double scale = (data.head(M * M) / counts[0]).norm();
+  if (scale > 0 && std::isfinite(scale)) {
+    target /= scale;
+    J /= scale;
+  }
   std::vector<std::string> names = fq.names;
   names.insert(names.end(), fr.names.begin(), fr.names.end());
 
@@ -415,7 +426,8 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
   result.status = (k == 0 || summary.termination_type == ceres::CONVERGENCE)
                       ? TuneStatus::kConverged
                       : TuneStatus::kNoConvergence;
-  result.message = "ALS over " + std::to_string(lags) + " lag(s), final cost " +
+  result.message = "ALS over " + std::to_string(lags) +
+                   " lag(s), final cost (in units of the innovation covariance) " +
                    FormatNumber(k > 0 ? summary.final_cost : 0.0) +
                    (start.ok ? "" : "; the filter fails at the ALS estimate (NLL infinite)");
   TunerOptions no_se = options;

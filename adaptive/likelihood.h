@@ -164,9 +164,7 @@ class InnovationLikelihood {
   }
   // The average bound per interval: TunerOptions::max_integrator_steps, five
   // times that for a stiff model.
-  long StepsPerInterval() const {
-    return options_.max_integrator_steps * (Model::kStiff ? 5 : 1);
-  }
+  long StepsPerInterval() const { return options_.max_integrator_steps * (Model::kStiff ? 5 : 1); }
   // What a CV_TOO_MUCH_WORK failure means here: the bound on one interval.
   std::string OneIntervalBoundNote(const char* what) const {
     if (std::string(what).find("CV_TOO_MUCH_WORK") == std::string::npos) return "";

@@ -140,6 +140,31 @@ TEST(AlsOdelson, RecoversQAndRWithinThreeMonteCarloStandardErrors) {
   }
 }
 
+// A precise sensor: the same data in units 10^4 times larger (every
+// variance 1e-8 times as large), from the same start scaled alike, gives the
+// same estimate scaled by 1e-8. ALS used to stop at its start on such data
+// (residuals ~1e-9, gradient below the absolute tolerance), "converged".
+TEST(AlsOdelson, ScaleFreeOnAPreciseSensor) {
+  const TunerOptions options = AlsOptions(15);
+  const FilterData data = SimulateOdelson(5000, 2026);
+  const TuneResult ref = TuneWith<O, O::All>(WrongGainSpec(), options, {data});
+  ASSERT_TRUE(ref.IsSolutionUsable()) << ref.message;
+  constexpr double kScale = 1e-8;
+  FilterData small = data;
+  for (double& z : small.z) z *= std::sqrt(kScale);
+  FilterSpec spec = WrongGainSpec();
+  for (double& v : spec.q) v *= kScale;
+  for (double& v : spec.r) v *= kScale;
+  for (double& v : spec.p0) v *= kScale;
+  const TuneResult r = TuneWith<O, O::All>(spec, options, {small});
+  ASSERT_TRUE(r.IsSolutionUsable()) << r.message;
+  EXPECT_GT(r.iterations, 1) << r.termination;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(r.q[i * 3 + i] / kScale, ref.q[i * 3 + i], 1e-6 * ref.q[i * 3 + i]) << "q" << i;
+    EXPECT_NEAR(r.r[i * 3 + i] / kScale, ref.r[i * 3 + i], 1e-6 * ref.r[i * 3 + i]) << "r" << i;
+  }
+}
+
 // Odelson's stationary autocovariances, written out by hand:
 //   Abar = A - A L C,  P = Abar P Abar^T + G Q G^T + A L R L^T A^T,
 //   C_0 = C P C^T + R,  C_j = C Abar^j P C^T - C Abar^(j-1) A L R.
