@@ -14,6 +14,7 @@
 #include "../cli/cli_test_util.h"
 #include "error_text.h"
 #include "studies/study_config.h"
+#include "studies/study_results.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {
@@ -60,24 +61,14 @@ double IniValue(const std::string& ini, const std::string& key) {
   return NAN;
 }
 
-// The fields of a CSV line without quotes.
-std::vector<std::string> Fields(const std::string& line) {
-  std::vector<std::string> out;
-  std::istringstream in(line);
-  for (std::string f; std::getline(in, f, ',');) out.push_back(f);
-  if (!line.empty() && line.back() == ',') out.push_back("");
-  return out;
-}
-
-// runs.csv (or identification.csv) as rows of column -> value.
-std::vector<std::map<std::string, std::string>> Table(const std::string& text) {
-  const auto lines = SplitLines(text);
-  const auto header = Fields(lines.at(0));
+// A CSV file of the study (read by the study code's own reader, quotes and
+// all) as rows of column -> value.
+std::vector<std::map<std::string, std::string>> Table(const std::string& path) {
+  const CsvText csv = ReadCsvText(path);
   std::vector<std::map<std::string, std::string>> rows;
-  for (size_t i = 1; i < lines.size(); ++i) {
-    const auto f = Fields(lines[i]);
+  for (const auto& r : csv.rows) {
     std::map<std::string, std::string> row;
-    for (size_t j = 0; j < header.size() && j < f.size(); ++j) row[header[j]] = f[j];
+    for (size_t j = 0; j < csv.columns.size() && j < r.size(); ++j) row[csv.columns[j]] = r[j];
     rows.push_back(row);
   }
   return rows;
@@ -95,7 +86,7 @@ TEST_F(StudyIdentificationCli, EachRunIdentifiesWhatEstlabTuneFindsOnItsData) {
   WriteText(dir_.File("s.ini"), IdentificationStudy(3));
   const auto r = RunEstlab("study s.ini --out out --jobs 2 --quiet", dir_.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto runs = Table(ReadFile(dir_.File("out/runs.csv")));
+  const auto runs = Table(dir_.File("out/runs.csv"));
   ASSERT_EQ(runs.size(), 12u);  // 3 runs x 4 noise settings
 
   // Run 1's data as kept in its time series: `estlab tune` on it from the
@@ -135,7 +126,7 @@ TEST_F(StudyIdentificationCli, EachRunIdentifiesWhatEstlabTuneFindsOnItsData) {
     EXPECT_EQ(x.at("id_q_err").empty(), x.at("noise") == "oracle") << x.at("noise");
     EXPECT_EQ(x.at("id_r_err").empty(), x.at("noise") == "oracle") << x.at("noise");
   }
-  const auto timing = Table(ReadFile(dir_.File("out/timing.csv")));
+  const auto timing = Table(dir_.File("out/timing.csv"));
   for (const auto& x : timing)
     EXPECT_EQ(x.at("identify_wall_s").empty(), x.at("noise") == "oracle") << x.at("noise");
 }
@@ -154,13 +145,13 @@ TEST_F(StudyIdentificationCli, ScoresFollowFromRunsCsvAndJobsChangeNothing) {
   // score = mean over theta, omega of mean RMSE / the oracle's mean RMSE.
   std::map<std::string, std::map<std::string, double>> sum;  // noise -> state -> sum
   std::map<std::string, int> n;
-  for (const auto& x : Table(ReadFile(dir_.File("j1/runs.csv")))) {
+  for (const auto& x : Table(dir_.File("j1/runs.csv"))) {
     ASSERT_EQ(x.at("status"), "ok");
     sum[x.at("noise")]["theta"] += std::stod(x.at("rmse_theta"));
     sum[x.at("noise")]["omega"] += std::stod(x.at("rmse_omega"));
     ++n[x.at("noise")];
   }
-  const auto id = Table(ReadFile(dir_.File("j1/identification.csv")));
+  const auto id = Table(dir_.File("j1/identification.csv"));
   ASSERT_EQ(id.size(), 4u);
   for (const auto& x : id) {
     const std::string& noise = x.at("noise");
