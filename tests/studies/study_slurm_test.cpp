@@ -35,7 +35,9 @@ class StudySlurm : public ::testing::Test {
   }
   // estlab ARGS with the stand-in sbatch first on PATH.
   RunResult Estlab(const std::string& args) {
-    const std::string out = dir_.File("../slurm.out"), err = dir_.File("../slurm.err");
+    // Beside the folder (its own name), not in a shared one: ctest -j runs
+    // these tests at once, and one fixed /tmp/slurm.out mixed their output.
+    const std::string out = dir_.path() + ".out", err = dir_.path() + ".err";
     const std::string cmd = "cd '" + dir_.path() + "' && PATH='" + dir_.File("bin") +
                             "':\"$PATH\" '" + ESTLAB_BINARY + "' " + args + " >'" + out + "' 2>'" +
                             err + "'";
