@@ -5,7 +5,8 @@ JOBS       ?= 2
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES := cmake g++ make git pkg-config ccache libsundials-dev libceres-dev libeigen3-dev \
-                libboost-program-options-dev libgtest-dev libbenchmark-dev gnuplot-nox
+                libboost-program-options-dev libgtest-dev libbenchmark-dev gnuplot-nox \
+                libsleef-dev
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 ESTLAB := $(BUILD)/estlab
 # ccache keys on paths relative to the clone, so clones share cache entries.

@@ -53,6 +53,7 @@ struct ConstantVelocity2d {
   static constexpr int kStateDim = 4;
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;
+  static constexpr bool kPacketRhs = true;  // branch-free (src/core/packet.h)
   static constexpr std::array<const char*, 4> kStateNames = {"px", "vx", "py", "vy"};
   static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "m", "m/s"};
   static constexpr std::array<bool, 4> kAngleStates = {false, false, false, false};

@@ -27,6 +27,9 @@ struct CartPole {
   static constexpr int kStateDim = 4;
   static constexpr bool kHasInput = true;
   static constexpr bool kStiff = false;
+  // Rhs and every Eval are branch-free in T: points are moved in packets
+  // (src/core/packet.h).
+  static constexpr bool kPacketRhs = true;
   static constexpr std::array<const char*, 4> kStateNames = {"x", "v", "theta", "omega"};
   // Unit of each state ("" = dimensionless), for axis labels and reports.
   static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "rad", "rad/s"};

@@ -34,6 +34,9 @@ struct Dipc {
   static constexpr int kStateDim = 6;
   static constexpr bool kHasInput = true;
   static constexpr bool kStiff = false;
+  // Rhs and every Eval are branch-free in T: points are moved in packets
+  // (src/core/packet.h).
+  static constexpr bool kPacketRhs = true;
   static constexpr std::array<const char*, 6> kStateNames = {"x",      "v",      "theta1",
                                                              "omega1", "theta2", "omega2"};
   // Unit of each state ("" = dimensionless), for axis labels and reports.

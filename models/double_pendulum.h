@@ -30,6 +30,9 @@ struct DoublePendulum {
   static constexpr int kStateDim = 4;
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;
+  // Rhs and every Eval are branch-free in T: points are moved in packets
+  // (src/core/packet.h).
+  static constexpr bool kPacketRhs = true;
   static constexpr std::array<const char*, 4> kStateNames = {"theta1", "omega1", "theta2",
                                                              "omega2"};
   // Unit of each state ("" = dimensionless), for axis labels and reports.

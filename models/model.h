@@ -16,6 +16,11 @@
 //     or, for a discrete-time model (kDiscreteTime = true):
 //   Step<T>(t, x, dt, u, params)     x(t + dt) for any scalar T; such a model
 //                                    runs with Integrator::kDiscrete only
+//   kPacketRhs (optional)            true when Rhs (or Step) and every Eval
+//                                    are branch-free in T (no if, ?:, min,
+//                                    max or comparison on T): point sets are
+//                                    then moved kPacketWidth points per call
+//                                    (src/core/packet.h)
 //   kInvariantNames, Invariants(x, p), InvariantsHold(p, u)
 //   Measurements                     std::tuple of measurement structs
 // A measurement:

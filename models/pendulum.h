@@ -24,6 +24,9 @@ struct Pendulum {
   static constexpr int kStateDim = 2;
   static constexpr bool kHasInput = false;
   static constexpr bool kStiff = false;
+  // Rhs and every Eval are branch-free in T: points are moved in packets
+  // (src/core/packet.h).
+  static constexpr bool kPacketRhs = true;
   static constexpr std::array<const char*, 2> kStateNames = {"theta", "omega"};
   // Unit of each state ("" = dimensionless), for axis labels and reports.
   static constexpr std::array<const char*, 2> kStateUnits = {"rad", "rad/s"};

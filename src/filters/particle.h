@@ -46,11 +46,13 @@
 #include <string>
 #include <vector>
 
+#include "src/core/packet.h"
 #include "src/core/random.h"
 #include "src/filters/filter.h"
 #include "src/filters/filter_options.h"
 #include "src/filters/filter_util.h"
 #include "src/filters/ziggurat.h"
+#include "src/ode/packet_propagate.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -127,9 +129,10 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
       return Fail(FilterStatus::kFactorizationFailed, "process noise Q: " + why);
     const bool noisy = !Q.isZero(0.0);
     // x_i <- Phi(x_i) + L_Q e_i: all particles in one transition call (no
-    // virtual call per particle), then the noise in particle order.
+    // virtual call per particle; kPacketWidth per model call for a packet
+    // model, src/core/packet.h), then the noise in particle order.
     try {
-      transition_->StepPoints(particles_, t0, t1, &scratch_);
+      transition_->StepCloud(particles_, t0, t1, &scratch_);
     } catch (const std::exception& e) {
       return Fail(FilterStatus::kTransitionFailed, std::string("transition failed: ") + e.what());
     }
@@ -158,8 +161,8 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     double log_det_r;
     Whiten<kM>(r_lower, Measurement(Measurement::Zero()), &zero_whitened, &log_det_r);
     const double log_norm = GaussianLogLikelihood<kM>(zero_whitened, log_det_r);
+    EvalMeasurements();
     for (Eigen::Index i = 0; i < n; ++i) {
-      predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
       const Measurement nu_i =
           WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
       const Measurement whitened =
@@ -190,11 +193,9 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
       return FailResult(FilterStatus::kNonFinite,
                         "all particle likelihoods underflowed (the measurement is far from "
                         "every particle)");
+    ExpWeights(max_l);
     double sum = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      weights_[i] = std::exp(log_likelihoods_(i) - max_l);
-      sum += weights_[i];
-    }
+    for (Eigen::Index i = 0; i < n; ++i) sum += weights_[i];
     const double log_lik = max_l + std::log(sum);
     result.log_likelihood = log_lik;
     log_weights_ = log_likelihoods_.array() - log_lik;
@@ -238,6 +239,33 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     State e;
     for (int j = 0; j < kN; ++j) e(j) = (*normal_)(rng_);
     return e;
+  }
+
+  // predicted_measurements_.col(i) = h(x_i); kPacketWidth particles per call
+  // for a packet model (src/core/packet.h).
+  void EvalMeasurements() {
+    if constexpr (kPacketModel<Model>) {
+      for (Eigen::Index first = 0; first < particles_.cols(); first += kPacketWidth)
+        ScatterColumns<kM>(
+            Meas::template Eval<Packet>(GatherColumns<kN>(particles_, first), params_), first,
+            &predicted_measurements_);
+    } else {
+      for (Eigen::Index i = 0; i < particles_.cols(); ++i)
+        predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
+    }
+  }
+
+  // weights_[i] = exp(log_likelihoods_(i) - shift), kPacketWidth at a time
+  // (SLEEF's exp, src/core/packet.h; the last packet repeats the last value).
+  void ExpWeights(double shift) {
+    const Eigen::Index n = log_likelihoods_.size();
+    for (Eigen::Index first = 0; first < n; first += kPacketWidth) {
+      Packet l;
+      for (int k = 0; k < kPacketWidth; ++k)
+        l.Set(k, log_likelihoods_(std::min<Eigen::Index>(first + k, n - 1)));
+      const Packet w = exp(l - Packet(shift));
+      for (int k = 0; k < kPacketWidth && first + k < n; ++k) weights_[first + k] = w[k];
+    }
   }
 
   Eigen::Map<const Eigen::VectorXd> weight_vector() const {

@@ -22,7 +22,7 @@
 //   ParticleSmoother<2> ps;
 //   ps.AddFiltered(pf.particles(), pf.weights());                  // step 0
 //   for k = 1..K:
-//     transition.StepPoints(pf.particles(), t0, t1, &means);       // m = Phi(x)
+//     transition.StepCloud(pf.particles(), t0, t1, &means);        // m = Phi(x)
 //     if (!ps.AddPredicted(means, Q, &why)) ...;                   // Q must be SPD
 //     pf.Predict(t0, t1, Q); pf.Update(z, R);
 //     ps.AddFiltered(pf.particles(), pf.weights());

@@ -84,6 +84,15 @@ class Transition {
   virtual void StepPoints(const Points& points, double t0, double t1, Points* out) {
     for (Eigen::Index i = 0; i < points.cols(); ++i) out->col(i) = Step(points.col(i), t0, t1);
   }
+  // StepPoints() for a particle cloud: the fixed-step transitions of a packet
+  // model (src/core/packet.h) move kPacketWidth particles per model call with
+  // vectorised sin, cos and exp, so a column may differ from Step() in the
+  // last bits of those functions; otherwise the same as StepPoints(). Not for
+  // sigma points: a scaled UKF's weights (~1e6 for alpha = 1e-3) turn a
+  // last-bit difference into 1e-8 in the covariance.
+  virtual void StepCloud(const Points& points, double t0, double t1, Points* out) {
+    StepPoints(points, t0, t1, out);
+  }
 
   void SetInput(double u) { input_ = u; }
   double input() const { return input_; }

@@ -9,6 +9,7 @@
 #include "src/ode/autodiff.h"
 #include "src/ode/cvodes.h"
 #include "src/ode/fixed_step.h"
+#include "src/ode/packet_propagate.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -47,13 +48,21 @@ class FixedStepTransition final : public Transition<Model> {
   using typename Base::Points;
   void StepPoints(const Points& points, double t0, double t1, Points* out) override {
     const Eigen::Index count = points.cols();
-    this->stats_.internal_steps += long(substeps_) * count;
-    this->stats_.rhs_evals += long(substeps_) * RhsEvalsPerStep(scheme_) * count;
+    CountPoints(count);
     const double u = this->input_;
     const Params& p = this->params_;
     for (Eigen::Index i = 0; i < count; ++i)
       out->col(i) =
           FixedPropagate<Model, double>(scheme_, State(points.col(i)), t0, t1, substeps_, u, p);
+  }
+  void StepCloud(const Points& points, double t0, double t1, Points* out) override {
+    if constexpr (kPacketModel<Model>) {
+      CountPoints(points.cols());
+      FixedPropagatePoints<Model>(scheme_, points, t0, t1, substeps_, this->input_, this->params_,
+                                  out);  // kPacketWidth points per model call
+    } else {
+      StepPoints(points, t0, t1, out);
+    }
   }
   std::string Name() const override { return IntegratorName(scheme_); }
 
@@ -62,6 +71,10 @@ class FixedStepTransition final : public Transition<Model> {
     this->stats_.internal_steps += substeps_;
     this->stats_.rhs_evals += long(substeps_) * RhsEvalsPerStep(scheme_);
     if (jacobian) this->stats_.jacobian_evals += long(substeps_) * RhsEvalsPerStep(scheme_);
+  }
+  void CountPoints(Eigen::Index count) {
+    this->stats_.internal_steps += long(substeps_) * count;
+    this->stats_.rhs_evals += long(substeps_) * RhsEvalsPerStep(scheme_) * count;
   }
   Integrator scheme_;
   int substeps_;

@@ -81,7 +81,7 @@ std::string KeyOf(const ModelSource& s) {
   for (const std::string& part :
        {s.contents, s.type, std::string(ESTLAB_VERSION), std::string(ESTLAB_GIT_COMMIT),
         SelfIdentity(), std::string(ESTLAB_PLUGIN_CXX), PluginFlags(),
-        std::string(ESTLAB_PLUGIN_TUNER_LIBS)})
+        std::string(ESTLAB_PLUGIN_TUNER_LIBS), std::string(ESTLAB_PLUGIN_LIBS)})
     h = Fnv1a64(part + "\n", h);
   return HashHex(h);
 }
@@ -148,7 +148,8 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
   std::fprintf(stderr, "estlab: compiling model %s, %s (first use; cached in %s)\n", s.name.c_str(),
                which == "entry" ? "filters and simulator" : "tuner", dir.c_str());
   const auto start = std::chrono::steady_clock::now();
-  const std::string libs = which == "tune" ? std::string(" ") + ESTLAB_PLUGIN_TUNER_LIBS : "";
+  std::string libs = std::string(" ") + ESTLAB_PLUGIN_LIBS;
+  if (which == "tune") libs += std::string(" ") + ESTLAB_PLUGIN_TUNER_LIBS;
   const std::string command = std::string(ESTLAB_PLUGIN_CXX) + " " + PluginFlags() + " " +
                               Quote(cpp.string()) + " -o " + Quote(so.string()) + libs + " > " +
                               Quote(log.string()) + " 2>&1";

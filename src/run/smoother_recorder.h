@@ -50,9 +50,9 @@ class SmootherRecorder {
   // smoother's propagated means of the current cloud. False with *why.
   bool BeforePredict(double t0, double t1, const StateCov& Q, std::string* why) {
     if (pf_ == nullptr) return true;
-    means_.resize(N, pf_->particles().cols());  // StepPoints writes, never resizes
+    means_.resize(N, pf_->particles().cols());  // StepCloud writes, never resizes
     try {
-      transition_->StepPoints(pf_->particles(), t0, t1, &means_);
+      transition_->StepCloud(pf_->particles(), t0, t1, &means_);  // as the PF moves them
     } catch (const std::exception& e) {
       *why = std::string("particle smoother: transition failed: ") + e.what();
       return false;
