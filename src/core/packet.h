@@ -11,11 +11,13 @@
 //   double dtheta_of_point_1 = dx(0)[1];
 //
 // Numbers: +, -, *, / and sqrt are IEEE double lane by lane, so each lane
-// equals the scalar computation exactly. sin, cos and exp are SLEEF's
-// deterministic 1.0-ULP functions (Sleef_cinz_*: no FMA; Sleef_finz_* in an
-// AVX2+FMA build): identical on every machine for one build, but they may
-// differ from the C library's in the last bit. Other functions are the C
-// library's, lane by lane.
+// equals the scalar computation exactly. sin and cos are SLEEF's
+// deterministic 3.5-ULP functions, exp its 1.0-ULP one (Sleef_cinz_*: no
+// FMA; Sleef_finz_* in an AVX2+FMA build): identical on every machine for
+// one build, but they may differ from the C library's in the last two bits
+// (the 1.0-ULP sin costs as many instructions as glibc's in SSE2; the
+// 3.5-ULP one 2.6 times fewer). Other functions are the C library's, lane by
+// lane.
 //
 // Width: 2 (SSE2, every x86-64) by default; 4 when compiled for AVX
 // (cmake -DESTLAB_NATIVE=ON on an AVX2 machine).
@@ -82,16 +84,16 @@ Packet Lanewise(F f, const Packet& x, const Packet& z) {
 }
 
 #if defined(__AVX2__) && defined(__FMA__)
-inline Packet sin(const Packet& x) { return Packet(Sleef_finz_sind4_u10avx2(x.v)); }
-inline Packet cos(const Packet& x) { return Packet(Sleef_finz_cosd4_u10avx2(x.v)); }
+inline Packet sin(const Packet& x) { return Packet(Sleef_finz_sind4_u35avx2(x.v)); }
+inline Packet cos(const Packet& x) { return Packet(Sleef_finz_cosd4_u35avx2(x.v)); }
 inline Packet exp(const Packet& x) { return Packet(Sleef_finz_expd4_u10avx2(x.v)); }
 #elif defined(__AVX__)
-inline Packet sin(const Packet& x) { return Packet(Sleef_cinz_sind4_u10avx(x.v)); }
-inline Packet cos(const Packet& x) { return Packet(Sleef_cinz_cosd4_u10avx(x.v)); }
+inline Packet sin(const Packet& x) { return Packet(Sleef_cinz_sind4_u35avx(x.v)); }
+inline Packet cos(const Packet& x) { return Packet(Sleef_cinz_cosd4_u35avx(x.v)); }
 inline Packet exp(const Packet& x) { return Packet(Sleef_cinz_expd4_u10avx(x.v)); }
 #else
-inline Packet sin(const Packet& x) { return Packet(Sleef_cinz_sind2_u10sse2(x.v)); }
-inline Packet cos(const Packet& x) { return Packet(Sleef_cinz_cosd2_u10sse2(x.v)); }
+inline Packet sin(const Packet& x) { return Packet(Sleef_cinz_sind2_u35sse2(x.v)); }
+inline Packet cos(const Packet& x) { return Packet(Sleef_cinz_cosd2_u35sse2(x.v)); }
 inline Packet exp(const Packet& x) { return Packet(Sleef_cinz_expd2_u10sse2(x.v)); }
 #endif
 inline Packet sqrt(const Packet& x) { return Lanewise([](double s) { return std::sqrt(s); }, x); }

@@ -1,7 +1,8 @@
 // Packet (src/core/packet.h): arithmetic equals the scalar computation bit
-// for bit in every lane; sin, cos and exp (SLEEF) are within 2 ULP of the C
-// library's (each is within 1 ULP of the exact value) over a grid, and agree
-// on the special values; the lane-wise functions are the C library's.
+// for bit in every lane; sin and cos (SLEEF, 3.5 ULP) are within 4 ULP and
+// exp (1.0 ULP) within 2 ULP of the C library's (itself within 0.5-1 ULP of
+// the exact value) over grids, and they agree on the special values; the
+// lane-wise functions are the C library's.
 #include "src/core/packet.h"
 
 #include <gtest/gtest.h>
@@ -54,22 +55,23 @@ TEST(Packet, ArithmeticIsTheScalarArithmeticInEveryLane) {
   }
 }
 
-TEST(Packet, SinCosExpWithinTwoUlpOfTheCLibrary) {
+TEST(Packet, SinCosExpWithinTheirUlpBoundsOfTheCLibrary) {
   struct Case {
     const char* name;
     Packet (*packet)(const Packet&);
     double (*scalar)(double);
     std::vector<double> grid;
+    double max_ulp;
   };
   const std::vector<Case> cases = {
       {"sin", [](const Packet& x) { return sin(x); }, [](double x) { return std::sin(x); },
-       Grid(-50.0, 50.0, 20001)},
+       Grid(-50.0, 50.0, 20001), 4.0},
       {"sin (large)", [](const Packet& x) { return sin(x); }, [](double x) { return std::sin(x); },
-       Grid(-1e6, 1e6, 2001)},
+       Grid(-1e6, 1e6, 2001), 4.0},
       {"cos", [](const Packet& x) { return cos(x); }, [](double x) { return std::cos(x); },
-       Grid(-50.0, 50.0, 20001)},
+       Grid(-50.0, 50.0, 20001), 4.0},
       {"exp", [](const Packet& x) { return exp(x); }, [](double x) { return std::exp(x); },
-       Grid(-700.0, 700.0, 20001)},
+       Grid(-700.0, 700.0, 20001), 2.0},
   };
   for (const Case& c : cases) {
     double worst = 0.0;
@@ -79,13 +81,13 @@ TEST(Packet, SinCosExpWithinTwoUlpOfTheCLibrary) {
         const double x = c.grid[(i + k) % c.grid.size()];
         const double ref = c.scalar(x);
         // Near a zero of sin or cos the relative ULP is of a tiny number:
-        // bound the absolute error by 2 ULP of 1 there instead.
+        // bound the absolute error in ULP of 1 there instead.
         const double d = std::abs(ref) < 1e-3 ? std::abs(y[k] - ref) / 2.220446049250313e-16
                                               : UlpDistance(y[k], ref);
         worst = std::max(worst, d);
       }
     }
-    EXPECT_LE(worst, 2.0) << c.name;
+    EXPECT_LE(worst, c.max_ulp) << c.name;
   }
 }
 
