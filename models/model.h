@@ -51,6 +51,19 @@ consteval bool IsDiscreteTime() {
 template <class M>
 inline constexpr bool kDiscreteTime = IsDiscreteTime<M>();
 
+// True for a model whose Rhs (or Step) and every measurement's Eval may be
+// evaluated on packets of points (`static constexpr bool kPacketRhs = true;`,
+// src/core/packet.h); models without the member are evaluated point by point.
+template <class M>
+consteval bool IsPacketModel() {
+  if constexpr (requires { M::kPacketRhs; })
+    return bool(M::kPacketRhs);
+  else
+    return false;
+}
+template <class M>
+inline constexpr bool kPacketModel = IsPacketModel<M>();
+
 // The dynamics: Rhs<T>(t, x, u, p) = dx/dt, or Step<T>(t, x, dt, u, p) for a
 // discrete-time model.
 template <class M>

@@ -25,7 +25,7 @@
 // WARNING: a packet has no order. Only models that declare
 // `static constexpr bool kPacketRhs = true;` (branch-free Rhs and Eval:
 // no if, ?:, comparison, min or max on T) are evaluated on packets
-// (kPacketModel below); others keep one scalar call per point.
+// (kPacketModel, models/model.h); others keep one scalar call per point.
 #ifndef ESTLAB_CORE_PACKET_H_
 #define ESTLAB_CORE_PACKET_H_
 
@@ -56,10 +56,22 @@ struct Packet {
   double operator[](int lane) const { return v[lane]; }
   void Set(int lane, double s) { v[lane] = s; }
 
-  Packet& operator+=(const Packet& o) { v += o.v; return *this; }
-  Packet& operator-=(const Packet& o) { v -= o.v; return *this; }
-  Packet& operator*=(const Packet& o) { v *= o.v; return *this; }
-  Packet& operator/=(const Packet& o) { v /= o.v; return *this; }
+  Packet& operator+=(const Packet& o) {
+    v += o.v;
+    return *this;
+  }
+  Packet& operator-=(const Packet& o) {
+    v -= o.v;
+    return *this;
+  }
+  Packet& operator*=(const Packet& o) {
+    v *= o.v;
+    return *this;
+  }
+  Packet& operator/=(const Packet& o) {
+    v /= o.v;
+    return *this;
+  }
 };
 
 inline Packet operator+(const Packet& a, const Packet& b) { return Packet(a.v + b.v); }
@@ -96,28 +108,24 @@ inline Packet sin(const Packet& x) { return Packet(Sleef_cinz_sind2_u35sse2(x.v)
 inline Packet cos(const Packet& x) { return Packet(Sleef_cinz_cosd2_u35sse2(x.v)); }
 inline Packet exp(const Packet& x) { return Packet(Sleef_cinz_expd2_u10sse2(x.v)); }
 #endif
-inline Packet sqrt(const Packet& x) { return Lanewise([](double s) { return std::sqrt(s); }, x); }
-inline Packet log(const Packet& x) { return Lanewise([](double s) { return std::log(s); }, x); }
-inline Packet tan(const Packet& x) { return Lanewise([](double s) { return std::tan(s); }, x); }
-inline Packet tanh(const Packet& x) { return Lanewise([](double s) { return std::tanh(s); }, x); }
+inline Packet sqrt(const Packet& x) {
+  return Lanewise([](double s) { return std::sqrt(s); }, x);
+}
+inline Packet log(const Packet& x) {
+  return Lanewise([](double s) { return std::log(s); }, x);
+}
+inline Packet tan(const Packet& x) {
+  return Lanewise([](double s) { return std::tan(s); }, x);
+}
+inline Packet tanh(const Packet& x) {
+  return Lanewise([](double s) { return std::tanh(s); }, x);
+}
 inline Packet atan2(const Packet& y, const Packet& x) {
   return Lanewise([](double a, double b) { return std::atan2(a, b); }, y, x);
 }
 inline Packet pow(const Packet& x, const Packet& e) {
   return Lanewise([](double a, double b) { return std::pow(a, b); }, x, e);
 }
-
-// True for a model whose Rhs (or Step) and every measurement's Eval may be
-// evaluated on packets (the model sets kPacketRhs = true).
-template <class M>
-consteval bool IsPacketModel() {
-  if constexpr (requires { M::kPacketRhs; })
-    return bool(M::kPacketRhs);
-  else
-    return false;
-}
-template <class M>
-inline constexpr bool kPacketModel = IsPacketModel<M>();
 
 }  // namespace estlab
 

@@ -52,8 +52,8 @@ void FixedPropagatePoints(Integrator scheme,
   constexpr int kN = Model::kStateDim;
   for (Eigen::Index first = 0; first < points.cols(); first += kPacketWidth) {
     const Vec<Packet, kN> x = GatherColumns<kN>(points, first);
-    ScatterColumns<kN>(FixedPropagate<Model, Packet, Prm>(scheme, x, t0, t1, substeps, u, p),
-                       first, out);
+    ScatterColumns<kN>(FixedPropagate<Model, Packet, Prm>(scheme, x, t0, t1, substeps, u, p), first,
+                       out);
   }
 }
 

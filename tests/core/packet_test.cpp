@@ -17,8 +17,8 @@ namespace {
 // Distance between a and b in units in the last place of b.
 double UlpDistance(double a, double b) {
   if (a == b) return 0.0;
-  const double ulp = std::nextafter(std::abs(b), std::numeric_limits<double>::infinity()) -
-                     std::abs(b);
+  const double ulp =
+      std::nextafter(std::abs(b), std::numeric_limits<double>::infinity()) - std::abs(b);
   return std::abs(a - b) / ulp;
 }
 

@@ -40,7 +40,8 @@ std::vector<Vec<double, 1>> Measurements() {
   Rng rng(11);
   std::vector<Vec<double, 1>> z;
   for (int k = 0; k < 200; ++k) {
-    if (k > 0) x = FixedPropagate<models::Pendulum, double>(Integrator::kRk4, x, 0.0, 0.05, 5, 0.0, p);
+    if (k > 0)
+      x = FixedPropagate<models::Pendulum, double>(Integrator::kRk4, x, 0.0, 0.05, 5, 0.0, p);
     z.push_back(Vec<double, 1>(std::sin(x(0)) + 0.1 * rng.Normal()));
   }
   return z;
@@ -60,7 +61,9 @@ Trace RunFilter(const Options& options) {
   Trace t;
   const std::vector<Vec<double, 1>> z = Measurements();
   for (size_t k = 0; k < z.size(); ++k) {
-    if (k > 0) EXPECT_EQ(filter.Predict(0.05 * (k - 1), 0.05 * k, Q), FilterStatus::kOk);
+    if (k > 0) {
+      EXPECT_EQ(filter.Predict(0.05 * (k - 1), 0.05 * k, Q), FilterStatus::kOk);
+    }
     const StepResult<1> r = filter.Update(z[k], R);
     EXPECT_EQ(r.status, FilterStatus::kOk);
     t.mean.push_back(filter.mean());

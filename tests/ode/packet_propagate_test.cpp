@@ -55,8 +55,7 @@ double PacketVsScalar(Integrator scheme, int count) {
 template <class Model>
 void ExpectAgreement(double tolerance) {
   static_assert(kPacketModel<Model>);
-  for (Integrator scheme :
-       {Integrator::kEuler, Integrator::kSemiImplicitEuler, Integrator::kRk4})
+  for (Integrator scheme : {Integrator::kEuler, Integrator::kSemiImplicitEuler, Integrator::kRk4})
     for (int count : {1, kPacketWidth - 1, kPacketWidth, 2 * kPacketWidth + 1, 257}) {
       if (count < 1) continue;
       EXPECT_LE(PacketVsScalar<Model>(scheme, count), tolerance)
