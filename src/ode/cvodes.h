@@ -170,6 +170,11 @@ class CvodesTransition final : public Transition<Model> {
   void Create(const State& x, double t0) {
     Check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
     y_ = N_VNew_Serial(kN, ctx_);
+    if (y_ == nullptr) throw NumericalError("N_VNew_Serial failed");
+    // Fused vector operations (one call for a linear combination of many
+    // vectors, as the sensitivity corrector and the Nordsieck update need):
+    // off by default in SUNDIALS; the clones CVODES makes inherit them.
+    Check(N_VEnableFusedOps_Serial(y_, SUNTRUE), "N_VEnableFusedOps_Serial");
     Copy(x, y_);
     mem_ = CVodeCreate(use_bdf_ ? CV_BDF : CV_ADAMS, ctx_);
     if (mem_ == nullptr) throw NumericalError("CVodeCreate failed");
