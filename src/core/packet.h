@@ -29,13 +29,26 @@
 #ifndef ESTLAB_CORE_PACKET_H_
 #define ESTLAB_CORE_PACKET_H_
 
-#include <sleef.h>
-
 #include <cmath>
 
 #include <Eigen/Core>
 
+#include <sleef.h>
+// sleef.h's own helper macros, not part of its API.
+#undef CONST
+#undef IMPORT
+
+// The width is part of every packet symbol's name (an inline namespace), so
+// code compiled for another width (say -mavx against a portable estlab)
+// fails to link instead of mixing 16- and 32-byte packets.
+#if defined(__AVX__)
+#define ESTLAB_PACKET_ABI packet4
+#else
+#define ESTLAB_PACKET_ABI packet2
+#endif
+
 namespace estlab {
+inline namespace ESTLAB_PACKET_ABI {
 
 #if defined(__AVX__)
 inline constexpr int kPacketWidth = 4;
@@ -48,8 +61,8 @@ struct Packet {
   V v;
 
   Packet() : v(V{}) {}
-  Packet(double s) {  // NOLINT: implicit, every lane s (as Jet(double))
-    for (int k = 0; k < kPacketWidth; ++k) v[k] = s;
+  Packet(double s) : v(V{}) {  // NOLINT: implicit, every lane s (as Jet(double))
+    for (int k = 0; k < kPacketWidth; ++k) v[k] = s;  // (V{} + s would turn -0 into +0)
   }
   explicit Packet(V x) : v(x) {}
 
@@ -127,6 +140,7 @@ inline Packet pow(const Packet& x, const Packet& e) {
   return Lanewise([](double a, double b) { return std::pow(a, b); }, x, e);
 }
 
+}  // namespace ESTLAB_PACKET_ABI
 }  // namespace estlab
 
 namespace Eigen {

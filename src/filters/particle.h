@@ -18,7 +18,8 @@
 //           (Q may be singular or zero: L_Q from an eigendecomposition then)
 // Update (w_i the normalised weights before the update):
 //   log p_i = log N(wrap(z - h(x_i)); 0, R)
-//   log_likelihood = log sum_i w_i p_i              (log-sum-exp)
+//   log_likelihood = log sum_i w_i p_i              (log-sum-exp; the exps in
+//                                                    packets, SLEEF's, for every model)
 //   w_i <- w_i p_i / sum_j w_j p_j,  ESS = 1 / sum_i w_i^2
 //   resample (options.resample) when ESS < ess_threshold N; weights -> 1/N
 //   z^ = sum_i w_i h(x_i) (before the update),

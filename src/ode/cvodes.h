@@ -168,6 +168,7 @@ class CvodesTransition final : public Transition<Model> {
   }
 
   void Create(const State& x, double t0) {
+    Free();  // what a Create that threw part-way left
     Check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
     y_ = N_VNew_Serial(kN, ctx_);
     if (y_ == nullptr) throw NumericalError("N_VNew_Serial failed");
@@ -189,14 +190,18 @@ class CvodesTransition final : public Transition<Model> {
       Check(CVodeSetNonlinearSolver(mem_, nls_), "CVodeSetNonlinearSolver");
     } else {
       A_ = SUNDenseMatrix(kN, kN, ctx_);
+      if (A_ == nullptr) throw NumericalError("SUNDenseMatrix failed");
       linear_solver_ = SUNLinSol_Dense(y_, A_, ctx_);
+      if (linear_solver_ == nullptr) throw NumericalError("SUNLinSol_Dense failed");
       Check(CVodeSetLinearSolver(mem_, linear_solver_, A_), "CVodeSetLinearSolver");
       Check(CVodeSetJacFn(mem_, &JacobianFn), "CVodeSetJacFn");
     }
     yS_ = N_VCloneVectorArray(kN, y_);
+    if (yS_ == nullptr) throw NumericalError("N_VCloneVectorArray failed");
     initialised_ = true;
   }
 
+  // Frees what exists and forgets it (Create may run again after a throw).
   void Free() {
     if (yS_ != nullptr) N_VDestroyVectorArray(yS_, kN);
     if (mem_ != nullptr) CVodeFree(&mem_);
@@ -206,6 +211,14 @@ class CvodesTransition final : public Transition<Model> {
     if (A_ != nullptr) SUNMatDestroy(A_);
     if (y_ != nullptr) N_VDestroy(y_);
     if (ctx_ != nullptr) SUNContext_Free(&ctx_);
+    yS_ = nullptr;
+    mem_ = nullptr;
+    nls_ = nls_sens_ = nullptr;
+    linear_solver_ = nullptr;
+    A_ = nullptr;
+    y_ = nullptr;
+    ctx_ = nullptr;
+    initialised_ = sens_created_ = sens_on_ = have_last_ = false;
   }
 
   static void Copy(const State& x, N_Vector v) {

@@ -95,7 +95,7 @@ TEST(ParticleSmoother, AgreesWithTheRtsSmootherOnALinearGaussianModel) {
     if (k > 0) {
       ekf.SetInput(d.u[k - 1]);
       pf.SetInput(d.u[k - 1]);
-      transition->StepPoints(pf.particles(), d.t(k - 1), d.t(k), &means);
+      transition->StepCloud(pf.particles(), d.t(k - 1), d.t(k), &means);
       ASSERT_TRUE(ps.AddPredicted(means, d.Q, &why)) << why;
       ASSERT_EQ(ekf.Predict(d.t(k - 1), d.t(k), d.Q), FilterStatus::kOk);
       ASSERT_EQ(pf.Predict(d.t(k - 1), d.t(k), d.Q), FilterStatus::kOk);
