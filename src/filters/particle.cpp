@@ -53,6 +53,21 @@ void MultinomialDraws(const std::vector<double>& weights, int count, Rng& rng, i
       weights, count, [&](int k) { return sums[k] / total; }, start, indices);
 }
 
+// indices[0, split) and indices[split, N) are each ascending; sorts the
+// whole vector by merging them from the back in O(N) (what std::sort gave,
+// in O(N log N)). The second run is parked in `scratch` (N doubles, exact for
+// indices), so nothing is allocated.
+void MergeAscendingRuns(int split, std::vector<double>* scratch, std::vector<int>* indices) {
+  std::vector<int>& x = *indices;
+  const int n = int(x.size());
+  for (int k = split; k < n; ++k) (*scratch)[k - split] = x[k];
+  int a = split - 1, b = n - split - 1;
+  for (int out = n - 1; b >= 0; --out) {
+    const int from_b = int((*scratch)[b]);
+    x[out] = (a >= 0 && x[a] > from_b) ? x[a--] : (--b, from_b);
+  }
+}
+
 }  // namespace
 
 void Resample(const std::vector<double>& weights, ResampleScheme scheme, Rng& rng,
@@ -93,10 +108,7 @@ void Resample(const std::vector<double>& weights, ResampleScheme scheme, Rng& rn
       if (rest > 0) {
         for (double& r : residual) r /= residual_sum;
         MultinomialDraws(residual, rest, rng, filled, indices);
-        // Both runs are already ascending (the copies in i order, the draws
-        // from sorted uniforms), so merging them gives what sorting the
-        // whole vector gave, in O(N) instead of O(N log N).
-        std::inplace_merge(indices->begin(), indices->begin() + filled, indices->end());
+        MergeAscendingRuns(filled, &residual, indices);
       }
       return;
     }
