@@ -1,8 +1,6 @@
 // Packet: kPacketWidth doubles computed together, a scalar type for the
-// models' Rhs<T> and Eval<T>, so that a particle cloud or a sigma-point set
-// is moved kPacketWidth points per call with SIMD arithmetic and vectorised
-// sin, cos and exp (SLEEF, Debian's libsleef-dev) instead of one libm call
-// per point.
+// models' Rhs<T> and Eval<T>, so that a particle cloud is moved kPacketWidth
+// particles per model call with SIMD arithmetic instead of one call per point.
 //
 // Usage:
 //   Vec<Packet, 2> x;                          // lane k = point k
@@ -11,21 +9,33 @@
 //   double dtheta_of_point_1 = dx(0)[1];
 //
 // Numbers: +, -, *, / and sqrt are IEEE double lane by lane, so each lane
-// equals the scalar computation exactly. sin and cos are SLEEF's
-// deterministic 3.5-ULP functions, exp its 1.0-ULP one (Sleef_cinz_*: no
-// FMA; Sleef_finz_* in an AVX2+FMA build): identical on every machine for
-// one build, but they may differ from the C library's in the last two bits
-// (the 1.0-ULP sin costs as many instructions as glibc's in SSE2; the
-// 3.5-ULP one 2.6 times fewer). Other functions are the C library's, lane by
-// lane.
+// equals the scalar computation exactly. sin, cos and exp depend on the
+// CMake option ESTLAB_VECTOR_MATH:
+//  - OFF (the default): the C library's, lane by lane. Every lane is the
+//    scalar result bit for bit, so the packet path gives the same numbers as
+//    one scalar call per point (studies are byte-identical to a scalar
+//    build); the gain is the SIMD arithmetic only.
+//  - ON: SLEEF's (Debian's libsleef-dev) vectorised functions, sin and cos
+//    the deterministic 3.5-ULP ones, exp the 1.0-ULP one (Sleef_cinz_*: no
+//    FMA; Sleef_finz_* in an AVX2+FMA build). The same on every machine for
+//    one build, 2.4 (sin) and 1.5 (exp) times fewer instructions than glibc,
+//    but they may differ from the C library's in the last two bits, so a
+//    particle filter's results move by about 1e-15 relative
+//    (docs/performance.md).
+// Other functions are always the C library's, lane by lane.
 //
 // Width: 2 (SSE2, every x86-64) by default; 4 when compiled for AVX
-// (cmake -DESTLAB_NATIVE=ON on an AVX2 machine).
+// (cmake -DESTLAB_NATIVE=ON on an AVX2 machine). Width and vector math are
+// part of the packet functions' symbols (an inline namespace): a model
+// library built with other settings than estlab fails to link.
 //
 // WARNING: a packet has no order. Only models that declare
 // `static constexpr bool kPacketRhs = true;` (branch-free Rhs and Eval:
 // no if, ?:, comparison, min or max on T) are evaluated on packets
 // (kPacketModel, models/model.h); others keep one scalar call per point.
+// WARNING: functions that do not name Packet in their signature (the
+// particle filter's Update, say) have the same symbol in every setting: do
+// not link objects of builds with different settings together.
 #ifndef ESTLAB_CORE_PACKET_H_
 #define ESTLAB_CORE_PACKET_H_
 
@@ -33,16 +43,29 @@
 
 #include <Eigen/Core>
 
+#ifndef ESTLAB_VECTOR_MATH  // set by CMake (estlab_core's interface) to 0 or 1
+#define ESTLAB_VECTOR_MATH 0
+#endif
+#if ESTLAB_VECTOR_MATH
+#if !defined(__SSE2__)
+#error "ESTLAB_VECTOR_MATH needs SSE2 or AVX (x86-64); configure with -DESTLAB_VECTOR_MATH=OFF"
+#endif
 #include <sleef.h>
 // sleef.h's own helper macros, not part of its API.
 #undef CONST
 #undef IMPORT
+#endif
 
-// The width is part of every packet symbol's name (an inline namespace), so
-// code compiled for another width (say -mavx against a portable estlab)
-// fails to link instead of mixing 16- and 32-byte packets.
-#if defined(__AVX__)
+// Width and vector math are part of every packet symbol's name (an inline
+// namespace), so code compiled with other settings (say -mavx against a
+// portable estlab) fails to link instead of mixing 16- and 32-byte packets
+// or two sin functions.
+#if defined(__AVX__) && ESTLAB_VECTOR_MATH
+#define ESTLAB_PACKET_ABI packet4v
+#elif defined(__AVX__)
 #define ESTLAB_PACKET_ABI packet4
+#elif ESTLAB_VECTOR_MATH
+#define ESTLAB_PACKET_ABI packet2v
 #else
 #define ESTLAB_PACKET_ABI packet2
 #endif
@@ -108,7 +131,17 @@ Packet Lanewise(F f, const Packet& x, const Packet& z) {
   return y;
 }
 
-#if defined(__AVX2__) && defined(__FMA__)
+#if !ESTLAB_VECTOR_MATH
+inline Packet sin(const Packet& x) {
+  return Lanewise([](double s) { return std::sin(s); }, x);
+}
+inline Packet cos(const Packet& x) {
+  return Lanewise([](double s) { return std::cos(s); }, x);
+}
+inline Packet exp(const Packet& x) {
+  return Lanewise([](double s) { return std::exp(s); }, x);
+}
+#elif defined(__AVX2__) && defined(__FMA__)
 inline Packet sin(const Packet& x) { return Packet(Sleef_finz_sind4_u35avx2(x.v)); }
 inline Packet cos(const Packet& x) { return Packet(Sleef_finz_cosd4_u35avx2(x.v)); }
 inline Packet exp(const Packet& x) { return Packet(Sleef_finz_expd4_u10avx2(x.v)); }

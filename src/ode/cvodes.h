@@ -167,8 +167,19 @@ class CvodesTransition final : public Transition<Model> {
     return n;
   }
 
+  // Builds the solver, or throws with nothing of it kept: a half-made solver
+  // (mem_ set, yS_ not) would be taken for a whole one by the next step.
   void Create(const State& x, double t0) {
-    Free();  // what a Create that threw part-way left
+    Free();
+    try {
+      Build(x, t0);
+    } catch (...) {
+      Free();
+      throw;
+    }
+  }
+
+  void Build(const State& x, double t0) {
     Check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
     y_ = N_VNew_Serial(kN, ctx_);
     if (y_ == nullptr) throw NumericalError("N_VNew_Serial failed");

@@ -2,7 +2,7 @@
 // step integrators kPacketWidth points per call, for models that may be
 // evaluated on packets (src/core/packet.h, kPacketModel).
 //
-// Usage (FixedStepTransition::StepPoints does this):
+// Usage (FixedStepTransition::StepCloud does this):
 //   FixedPropagatePoints<models::Pendulum>(Integrator::kRk4, points, t0, t1, substeps, u,
 //                                          params, &moved);
 //

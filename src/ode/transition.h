@@ -85,10 +85,10 @@ class Transition {
     for (Eigen::Index i = 0; i < points.cols(); ++i) out->col(i) = Step(points.col(i), t0, t1);
   }
   // StepPoints() for a particle cloud: the fixed-step transitions of a packet
-  // model (src/core/packet.h) move kPacketWidth particles per model call with
-  // vectorised sin, cos and exp, so a column may differ from Step() in the
-  // last bits of those functions; otherwise the same as StepPoints(). Not for
-  // sigma points: a scaled UKF's weights (~1e6 for alpha = 1e-3) turn a
+  // model (src/core/packet.h) move kPacketWidth particles per model call.
+  // The same numbers as StepPoints(), except with ESTLAB_VECTOR_MATH on,
+  // where SLEEF's sin, cos and exp may move a column in the last bits. Not
+  // for sigma points: a scaled UKF's weights (~1e6 for alpha = 1e-3) turn a
   // last-bit difference into 1e-8 in the covariance.
   virtual void StepCloud(const Points& points, double t0, double t1, Points* out) {
     StepPoints(points, t0, t1, out);

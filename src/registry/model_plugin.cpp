@@ -148,8 +148,12 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
   std::fprintf(stderr, "estlab: compiling model %s, %s (first use; cached in %s)\n", s.name.c_str(),
                which == "entry" ? "filters and simulator" : "tuner", dir.c_str());
   const auto start = std::chrono::steady_clock::now();
-  std::string libs = std::string(" ") + ESTLAB_PLUGIN_LIBS;
-  if (which == "tune") libs += std::string(" ") + ESTLAB_PLUGIN_TUNER_LIBS;
+  std::string libs;  // each a path (may hold spaces) or empty
+  for (const char* lib : {ESTLAB_PLUGIN_LIBS, which == "tune" ? ESTLAB_PLUGIN_TUNER_LIBS : ""})
+    if (*lib != '\0') {
+      libs += ' ';
+      libs += Quote(lib);
+    }
   const std::string command = std::string(ESTLAB_PLUGIN_CXX) + " " + PluginFlags() + " " +
                               Quote(cpp.string()) + " -o " + Quote(so.string()) + libs + " > " +
                               Quote(log.string()) + " 2>&1";
