@@ -19,7 +19,7 @@
 // Update (w_i the normalised weights before the update):
 //   log p_i = log N(wrap(z - h(x_i)); 0, R)
 //   log_likelihood = log sum_i w_i p_i              (log-sum-exp; the exps in
-//                                                    packets, SLEEF's, for every model)
+//                                                    packets for every model, packet.h)
 //   w_i <- w_i p_i / sum_j w_j p_j,  ESS = 1 / sum_i w_i^2
 //   resample (options.resample) when ESS < ess_threshold N; weights -> 1/N
 //   z^ = sum_i w_i h(x_i) (before the update),
@@ -257,7 +257,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   }
 
   // weights_[i] = exp(log_likelihoods_(i) - shift), kPacketWidth at a time
-  // (SLEEF's exp, src/core/packet.h; the last packet repeats the last value).
+  // (packet exp, src/core/packet.h; the last packet repeats the last value).
   void ExpWeights(double shift) {
     const Eigen::Index n = log_likelihoods_.size();
     for (Eigen::Index first = 0; first < n; first += kPacketWidth) {
