@@ -54,7 +54,9 @@
 #include <string>
 #include <vector>
 
-#include "adaptive/tuner_impl.h"
+#include "adaptive/tune_verdict.h"
+#include "adaptive/tuner_drivers.h"
+#include "adaptive/tuner_result.h"
 #include "src/run/filter_run_impl.h"
 
 namespace estlab {
@@ -322,21 +324,21 @@ inline std::vector<std::string> AlsIdentifiability(const Eigen::MatrixXd& J,
 
 namespace tuner_internal {
 
+// The linear system of ALS: the innovation autocovariances of the data
+// (target, scaled by the lag-0 norm) against their model J theta_free.
+struct AlsSystem {
+  Eigen::MatrixXd J;
+  Eigen::VectorXd target;
+  std::vector<std::string> names;
+  int nq = 0;  // Q's free elements come first
+};
+
 template <class Model, class Meas>
-void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
-            const TunerOptions& options, const std::vector<FilterData>& datasets,
-            const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+AlsSystem BuildAlsSystem(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
+                         const TunerOptions& options, const std::vector<FilterData>& datasets) {
   using namespace als_internal;
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
-  TuneResult& result = *out;
-  const bool ekf = std::holds_alternative<EkfOptions>(spec.filter);
-  if (!(spec.kind() == FilterKind::kKf || (ekf && !spec.iterated())))
-    throw InputError(
-        "--estimator als supports the kf and the ekf (linearised along its own "
-        "estimates), not " +
-        std::string(FilterKindName(spec.kind())));
   const CovarianceParam<N>& qp = lik.q_param();
   const CovarianceParam<M>& rp = lik.r_param();
   const FreeElements<N> fq = FreeElementsOf<N>(qp, "q", likelihood_internal::StateNames<Model>());
@@ -391,8 +393,35 @@ void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     target /= scale;
     J /= scale;
   }
-  std::vector<std::string> names = fq.names;
-  names.insert(names.end(), fr.names.begin(), fr.names.end());
+  AlsSystem sys{.J = J, .target = target, .names = fq.names, .nq = nq};
+  sys.names.insert(sys.names.end(), fr.names.begin(), fr.names.end());
+  return sys;
+}
+
+template <class Model, class Meas>
+void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+            const TunerOptions& options, const std::vector<FilterData>& datasets,
+            const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+  using namespace als_internal;
+  constexpr int N = Model::kStateDim;
+  constexpr int M = Meas::kDim;
+  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
+  TuneResult& result = *out;
+  const bool ekf = std::holds_alternative<EkfOptions>(spec.filter);
+  if (!(spec.kind() == FilterKind::kKf || (ekf && !spec.iterated())))
+    throw InputError(
+        "--estimator als supports the kf and the ekf (linearised along its own "
+        "estimates), not " +
+        std::string(FilterKindName(spec.kind())));
+  const CovarianceParam<N>& qp = lik.q_param();
+  const CovarianceParam<M>& rp = lik.r_param();
+  const int lags = options.als_lags;
+  const int rows = lags * M * M;
+  const AlsSystem sys = BuildAlsSystem(lik, spec, options, datasets);
+  const Eigen::MatrixXd& J = sys.J;
+  const Eigen::VectorXd& target = sys.target;
+  const std::vector<std::string>& names = sys.names;
+  const int nq = sys.nq;
 
   // Levenberg-Marquardt on theta from the initial guess.
   std::vector<double> theta = result.theta_initial;

@@ -55,7 +55,9 @@
 #include <string>
 #include <vector>
 
-#include "adaptive/tuner_impl.h"
+#include "adaptive/tune_verdict.h"
+#include "adaptive/tuner_drivers.h"
+#include "adaptive/tuner_result.h"
 #include "src/run/filter_run_impl.h"
 
 namespace estlab {
@@ -285,42 +287,39 @@ std::vector<double> MStepTheta(const InnovationLikelihood<Model, Meas>& lik,
 
 namespace tuner_internal {
 
+// The EM iterations from result->theta_initial (its history, wall times
+// and rises in *result); *start gets the iterations and the best iterate in
+// theta_end / nll_end, *why the reason it stopped early. True when the
+// relative NLL change met em_tolerance.
 template <class Model, class Meas>
-void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
-           const TunerOptions& options, const std::vector<FilterData>& datasets,
-           const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
+                  const TunerOptions& options, const std::vector<FilterData>& datasets,
+                  TuneResult* out, TuneStart* start, std::string* why) {
   using namespace em_internal;
   using Clock = std::chrono::steady_clock;
-  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
   TuneResult& result = *out;
-  TuneStart start;
-  start.theta_start = result.theta_initial;
-  start.nll_start = result.nll_initial;
-  std::vector<double> theta = result.theta_initial, best = theta;
-  double nll = result.nll_initial, best_nll = nll;
+  std::vector<double> theta = result.theta_initial;
+  double nll = result.nll_initial;
+  start->theta_end = theta, start->nll_end = nll;
   result.nll_history.push_back(nll);
-  bool converged = false;
-  std::string why;
-  if (!std::isfinite(nll)) {
-    why = "the filter failed at the initial guess";
-  }
-  while (why.empty() && start.iterations < options.max_iterations) {
+  if (!std::isfinite(nll)) *why = "the filter failed at the initial guess";
+  while (why->empty() && start->iterations < options.max_iterations) {
     const auto t_it = Clock::now();
     EmSums<Model::kStateDim, Meas::kDim> sums;
     std::vector<double> next;
     try {
-      if (!EStep(lik, SpecAt(lik, spec, theta.data()), datasets, &sums, &why)) break;
+      if (!EStep(lik, SpecAt(lik, spec, theta.data()), datasets, &sums, why)) break;
       next = MStepTheta(lik, theta, sums);
     } catch (const std::exception& e) {  // InputError from the M-step, NumericalError
-      why = std::string("M-step: ") + e.what();
+      *why = std::string("M-step: ") + e.what();
       break;
     }
     double nll_next = kInf;
-    if (!lik.Nll(next.data(), &nll_next, &why) || !std::isfinite(nll_next)) {
-      why = "the filter failed at the M-step's Q and R: " + why;
+    if (!lik.Nll(next.data(), &nll_next, why) || !std::isfinite(nll_next)) {
+      *why = "the filter failed at the M-step's Q and R: " + *why;
       break;
     }
-    ++start.iterations;
+    ++start->iterations;
     const double change = nll_next - nll;
     // A rise counts above the rounding of a sum of many terms.
     result.nll_increases += change > 1e-12 * std::abs(nll_next);
@@ -328,15 +327,29 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
     result.iteration_wall_s.push_back(std::chrono::duration<double>(Clock::now() - t_it).count());
     if (options.progress)
       options.progress(
-          {.phase = "em", .iteration = start.iterations, .value = nll_next, .change = change});
+          {.phase = "em", .iteration = start->iterations, .value = nll_next, .change = change});
     theta = next;
     nll = nll_next;
-    if (nll < best_nll) best = theta, best_nll = nll;
-    if (std::abs(change) <= options.em_tolerance * std::abs(nll)) {
-      converged = true;
-      break;
-    }
+    if (nll < start->nll_end) start->theta_end = theta, start->nll_end = nll;
+    if (std::abs(change) <= options.em_tolerance * std::abs(nll)) return true;
   }
+  return false;
+}
+
+template <class Model, class Meas>
+void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
+           const TunerOptions& options, const std::vector<FilterData>& datasets,
+           const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+  const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
+  TuneResult& result = *out;
+  TuneStart start;
+  start.theta_start = result.theta_initial;
+  start.nll_start = result.nll_initial;
+  std::string why;
+  const bool converged = EmIterations(lik, spec, options, datasets, &result, &start, &why);
+  const std::vector<double> best = start.theta_end;
+  const double best_nll = start.nll_end;
+  result.trace = result.nll_history;
   start.ok = std::isfinite(best_nll);
   start.theta_end = best;
   start.nll_end = start.ok ? best_nll : kInf;
@@ -368,7 +381,10 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
                                   {.phase = "ml from EM's solution"});
     if (ml.ok) result.nll_ml_from_em = ml.nll_end;
   }
-  FinishTune(objective, spec, options, lower, upper, &result);
+  // The same verdict as the ml form's (adaptive/tune_verdict.h): Q's and R's
+  // log parameters have their constraint's 0 as lower bound.
+  const Eigen::MatrixXd H = FinishTune(objective, spec, options, lower, upper, &result);
+  ApplyVerdict(H, result.is_log, lower, upper, &result);
 }
 
 }  // namespace tuner_internal

@@ -43,18 +43,35 @@ std::string TwoLogSentence(const Eigen::VectorXd& v, int i, int j, const std::ve
          "); fix one of them (--param) to estimate the other";
 }
 
-std::string DirectionText(const Eigen::VectorXd& v, const std::vector<int>& involved,
-                          const std::vector<std::string>& names) {
+}  // namespace
+
+std::vector<int> SignificantComponents(const Eigen::VectorXd& v) {
+  const double vmax = v.cwiseAbs().maxCoeff();
+  std::vector<int> involved;
+  for (int i = 0; i < int(v.size()); ++i)
+    if (vmax > 0 && std::abs(v(i)) >= kSignificant * vmax) involved.push_back(i);
+  return involved;
+}
+
+std::string DirectionText(const Eigen::VectorXd& v, const std::vector<std::string>& names) {
+  Eigen::Index top = 0;
+  v.cwiseAbs().maxCoeff(&top);
+  const double sign = v(top) < 0 ? -1.0 : 1.0;
   std::string out;
-  for (int i : involved) {
-    const double c = std::round(v(i) * 100.0) / 100.0;
+  for (int i : SignificantComponents(v)) {
+    const double c = std::round(sign * v(i) * 100.0) / 100.0;
     out += (out.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) +
            FormatNumber(std::abs(c)) + " " + names[i];
   }
   return out;
 }
 
-}  // namespace
+Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log) {
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(int(theta.size()));
+  for (size_t i = 0; i < theta.size(); ++i)
+    if (!is_log[i] && theta[i] != 0.0) scale(int(i)) = std::abs(theta[i]);
+  return scale;
+}
 
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
                            const std::vector<std::string>& names, const std::vector<bool>& is_log) {
@@ -77,9 +94,7 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
   // friction of 5e-5 N m s next to log variances): theta_i = s_i u_i with
   // s_i = |theta_i| (1 for log parameters and zeros), so that the flatness
   // test compares like with like. cov = S cov_u S.
-  Eigen::VectorXd scale = Eigen::VectorXd::Ones(k);
-  for (int i = 0; i < k; ++i)
-    if (!is_log[i] && theta[i] != 0.0) scale(i) = std::abs(theta[i]);
+  const Eigen::VectorXd scale = FisherScale(theta, is_log);
   const Eigen::MatrixXd Hu = scale.asDiagonal() * Hs * scale.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Hu);
   const Eigen::VectorXd& lambda = eig.eigenvalues();
@@ -102,17 +117,11 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
   r.positive_definite = flat.empty();
   for (int j : flat) {
     const Eigen::VectorXd v = V.col(j);
-    const double vmax = v.cwiseAbs().maxCoeff();
-    std::vector<int> involved;
-    for (int i = 0; i < k; ++i) {
-      if (std::abs(v(i)) >= kSignificant * vmax) {
-        involved.push_back(i);
-        unidentified[i] = true;
-      }
-    }
+    const std::vector<int> involved = SignificantComponents(v);
+    for (int i : involved) unidentified[i] = true;
     if (lambda(j) < -kFlatRatio * top) {
       r.sentences.push_back(
-          "the NLL curves downwards along " + DirectionText(v, involved, names) + " (eigenvalue " +
+          "the NLL curves downwards along " + DirectionText(v, names) + " (eigenvalue " +
           FormatNumber(lambda(j)) +
           "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
           "valley); fix one of these parameters or restart from here, no "
@@ -127,7 +136,7 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
       for (size_t a = 0; a < involved.size(); ++a)
         list += (a ? (a + 1 == involved.size() ? " and " : ", ") : "") + plain[involved[a]];
       r.sentences.push_back(list + " are not separately identifiable: the NLL is flat along " +
-                            DirectionText(v, involved, names) + " (no standard errors for them)");
+                            DirectionText(v, names) + " (no standard errors for them)");
     }
   }
   cov = scale.asDiagonal() * cov * scale.asDiagonal();

@@ -39,6 +39,17 @@ struct FisherReport {
 // Relative eigenvalue below which a direction of H counts as flat.
 inline constexpr double kFlatRatio = 1e-9;
 
+// The relative units above: s_i = |theta_i| for a parameter on its natural
+// scale (1 for log parameters and zeros).
+Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log);
+
+// The components of v of at least 5 % of its largest, in order.
+std::vector<int> SignificantComponents(const Eigen::VectorXd& v);
+
+// v in parameter names, its largest component positive, two decimals:
+// "0.71 log l1 - 0.7 log q_h1".
+std::string DirectionText(const Eigen::VectorXd& v, const std::vector<std::string>& names);
+
 // names: the parameters as in the report ("L", "qc", "r_theta"); is_log:
 // whether theta_i is the log of that parameter.
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,

@@ -63,6 +63,12 @@ const char* TuneStatusName(TuneStatus status) {
       return "no-convergence";
     case TuneStatus::kAllStartsFailed:
       return "all-starts-diverged";
+    case TuneStatus::kNotAMinimum:
+      return "not-a-minimum";
+    case TuneStatus::kWorseThanStart:
+      return "worse-than-start";
+    case TuneStatus::kAtBound:
+      return "at-bound";
   }
   return "?";
 }
@@ -74,6 +80,7 @@ bool TunerOptions::IsValid(std::string* error) const {
   };
   if (burn_in < 0) return fail("burn-in must be >= 0, got " + std::to_string(burn_in));
   if (starts < 1) return fail("starts must be >= 1, got " + std::to_string(starts));
+  if (jobs < 1) return fail("jobs must be >= 1, got " + std::to_string(jobs));
   if (!(start_spread >= 0 && std::isfinite(start_spread)))
     return fail("start spread must be finite and >= 0, got " + FormatNumber(start_spread));
   if (!(bound_width > 0)) return fail("bound width must be > 0, got " + FormatNumber(bound_width));

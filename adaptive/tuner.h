@@ -103,9 +103,15 @@ struct TunerOptions {
   // Latin hypercube in [theta0 - spread, theta0 + spread] on the log
   // parameters (off-diagonal Cholesky entries keep their initial value),
   // drawn from Rng(seed).
+  // The physical parameters are spread too: uniformly within their bounds
+  // when both are finite (on the log scale for a > 0 parameter), else within
+  // theta0 +- spread (log scale) or theta0 +- max(|theta0|, 1e-3) * spread / 2
+  // (natural scale), clamped into the bounds. Starts run on `jobs` threads,
+  // each with its own filter; the result does not depend on jobs.
   int starts = 1;
   double start_spread = 2.0;
   uint64_t seed = 1;
+  int jobs = 1;
 
   // Bounds on the log parameters. Empty: theta0 +- bound_width (e^20 ~ 5e8
   // in variance). One value: the same for every log parameter. Otherwise one
@@ -169,23 +175,40 @@ struct TunerOptions {
   bool IsValid(std::string* error) const;
 };
 
+// How a fit ended (adaptive/tune_verdict.h decides it). Only kConverged is a
+// success: the optimiser met a tolerance, the final NLL is no worse than the
+// initial guess's, the Hessian of the NLL is positive (semi-)definite on the
+// directions not held at a bound (no direction curves downwards) and no
+// parameter ended against a bound of the search box. Every other status is
+// a failure the CLI reports with exit 1 (no --out file unless --keep-best).
 enum class TuneStatus {
-  kConverged,        // Ceres reported convergence
+  kConverged,        // a verified local minimum
   kNoConvergence,    // iteration limit or line-search trouble; best point kept
   kAllStartsFailed,  // the filter failed (diverged) at every start point
+  kNotAMinimum,      // the NLL curves downwards along a free direction (a saddle)
+  kWorseThanStart,   // the final NLL is above the initial guess's
+  kAtBound,          // a parameter ended against its search box, not its constraint
 };
 const char* TuneStatusName(TuneStatus status);
 
 // One start of the multi-start: theta_start is the start point (initial guess
-// or Latin hypercube), nll_start the NLL where Ceres began (after the
-// common-scale pre-search shifted theta_start by scale_shift).
+// or Latin hypercube) and nll_start its NLL (start 1: nll_start ==
+// nll_initial). The common-scale pre-search then shifts Q and R by e^s
+// (scale_shift): the optimiser begins at theta_scaled with NLL nll_scaled
+// (<= nll_start), the first value of its trace.
 struct TuneStart {
-  std::vector<double> theta_start, theta_end;
-  double scale_shift = 0.0;               // s of the common-scale pre-search (0 when off)
-  double nll_start = 0.0, nll_end = 0.0;  // +inf when the filter failed
+  std::vector<double> theta_start, theta_scaled, theta_end;
+  double scale_shift = 0.0;  // s of the common-scale pre-search (0 when off)
+  // +inf when the filter failed there.
+  double nll_start = 0.0, nll_scaled = 0.0, nll_end = 0.0;
   int iterations = 0;
-  bool ok = false;
+  bool ok = false;         // the optimiser ran and its end point is admissible
+  bool converged = false;  // its tolerances were met
   std::string termination;
+  // The optimiser's path: theta_scaled, then every accepted iterate, and
+  // the NLL at each (trace[0] = nll_scaled).
+  std::vector<std::vector<double>> trace_theta;
+  std::vector<double> trace;
 };
 
 struct TuneResult {
@@ -253,7 +276,12 @@ struct TuneResult {
   int nll_increases = 0;
   double nll_ml_from_em = std::numeric_limits<double>::quiet_NaN();
 
+  // The best start's trace (TuneStart::trace): the NLL at its scaled start
+  // and at every accepted iterate, each an admissible point.
+  std::vector<double> trace;
+
   bool IsSolutionUsable() const { return status != TuneStatus::kAllStartsFailed; }
+  bool IsConverged() const { return status == TuneStatus::kConverged; }
 };
 
 // Tunes the noise of `spec` (its q / qc / r are the initial guess) on the

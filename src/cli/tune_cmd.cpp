@@ -119,10 +119,34 @@ em takes no --burn-in.
 
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
-parameter). Multi-start: start 1 is the initial guess, the others a Latin
-hypercube within +- --start-spread (2) of it, drawn from --seed. Starts are
-numbered from 1 everywhere: the text's "start N", the JSON "message" and
-"best_start"; the JSON "starts" array lists them in that order.
+parameter). No point outside the bounds or a parameter's constraint is ever
+evaluated (a projected L-BFGS; least squares: Ceres' bounded blocks).
+Multi-start: start 1 is the initial guess, the others a Latin hypercube
+drawn from --seed: Q's and R's log parameters within +- --start-spread (2)
+of it, each --estimate-param parameter within its --param-bounds (log scale
+for a > 0 one) or, without both bounds, within +- --start-spread on the log
+scale (> 0) or +- max(|p|, 1e-3) * spread / 2. --jobs N runs the starts on
+N threads; the result is the same for any N. Every start is reported: its
+NLL at its point ("nll_start"; start 1's is nll_initial), after the
+common-scale search that shifts Q and R by e^s before the optimiser starts
+("scale_shift", "nll_scaled"), and at its end. Starts are numbered from 1
+everywhere: the text's "start N", the JSON "message" and "best_start"; the
+JSON "starts" array lists them in that order.
+
+Status: 'converged' only when the optimiser met a tolerance, the tuned NLL
+is no worse than the initial guess's, the Hessian of the NLL has no
+negative curvature on the parameters not at a bound, and no parameter ended
+against its search box. Otherwise the status says what it is:
+not-a-minimum (the direction named in parameter names), worse-than-start,
+at-bound (a search-box bound, not a constraint: a variance or a > 0
+parameter pushed to its lower log bound, or a >= 0 parameter at 0, is a
+constrained minimum and stays converged, flagged 'at a bound'),
+no-convergence (iteration limit, line search) or all-starts-diverged. Each
+prints the report, a sentence on stderr and exits 1; --out is written only
+with --keep-best, and then says in the file that it is not a verified fit.
+The convergence trace ("trace" in the JSON, the progress line and the
+--plot figure) is the NLL of every accepted iterate, each an admissible
+point.
 
 Output: a table (or --json) with the tuned Q and R, the NLL before and after,
 Ceres' termination, and the standard error of every log parameter from the
@@ -141,8 +165,7 @@ an output of the same name measures (the others 0); the validation report
 gives each file's prior. Truth columns are read as 'estlab filter' reads them
 (the file's .json from 'estlab simulate', or --truth; --no-truth). A
 parameter 'at a bound' ended within 0.1 (log scale) of its search box: the
-data push it further, so its estimate and SE are the box's. Exit status 1,
-and no --out file, when the filter diverges at every start.
+data push it further, so its estimate and SE are the box's.
 
 Progress: on a terminal, stderr shows one line per optimiser iteration
 (start k/N, iteration, NLL or least-squares cost, its change, elapsed time);
@@ -256,6 +279,19 @@ void PrintPhysical(const TuneResult& r) {
   for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
 }
 
+// Every start: where it began (the user's point, then after the common-scale
+// shift), where it ended, and how.
+void PrintStarts(const TuneResult& r) {
+  std::cout << "starts        NLL at start -> scaled -> end (iterations, optimiser)\n";
+  for (size_t s = 0; s < r.starts.size(); ++s) {
+    const TuneStart& st = r.starts[s];
+    std::cout << "  " << std::setw(3) << s + 1 << (int(s) == r.best_start ? "*" : " ") << " "
+              << std::setw(12) << st.nll_start << " -> " << std::setw(12) << st.nll_scaled
+              << " -> " << std::setw(12) << st.nll_end << "  (" << st.iterations << ", "
+              << (st.ok ? (st.converged ? "converged" : "not converged") : "failed") << ")\n";
+  }
+}
+
 void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
                 const std::vector<Validation>& validations, double horizon,
                 const std::string& out_path) {
@@ -282,6 +318,8 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
               << r.best_start + 1 << ")\n";
   }
   std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n";
+  if (!r.IsConverged()) std::cout << "NOT CONVERGED " << r.message << "\n";
+  if (r.starts.size() > 1) PrintStarts(r);
   if (!std::isnan(r.nll_ml_from_em))
     std::cout << "              ml from EM's solution " << r.nll_ml_from_em << " (EM - ml "
               << r.nll_tuned - r.nll_ml_from_em << ")\n";
@@ -365,6 +403,7 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   j.Key("nll_initial").Value(r.nll_initial).Key("nll_tuned").Value(r.nll_tuned);
   j.Key("updates").Value(r.updates);
   j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
+  j.Key("trace").Value(r.trace);
   j.Key("wall_s").Value(r.wall_s);
   if (r.form == std::string("em")) {
     j.Key("em").BeginObject().Key("nll_history").Value(r.nll_history);
@@ -375,8 +414,11 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   j.Key("starts").BeginArray();
   for (const auto& s : r.starts) {
     j.BeginObject().Key("theta_start").Value(s.theta_start).Key("nll_start").Value(s.nll_start);
+    j.Key("scale_shift").Value(s.scale_shift).Key("theta_scaled").Value(s.theta_scaled);
+    j.Key("nll_scaled").Value(s.nll_scaled).Key("theta_end").Value(s.theta_end);
     j.Key("nll_end").Value(s.nll_end).Key("iterations").Value(s.iterations);
-    j.Key("ok").Value(s.ok).Key("termination").Value(s.termination).EndObject();
+    j.Key("ok").Value(s.ok).Key("converged").Value(s.converged);
+    j.Key("termination").Value(s.termination).EndObject();
   }
   j.EndArray();
   if (!validations.empty()) {
@@ -502,6 +544,11 @@ int RunTune(const std::vector<std::string>& args) {
       "diag | full | scalar | fixed (default: the --init-r* shape)")(
       "starts", po::value<int>()->default_value(1),
       "number of starts (1 = the initial guess only)")(
+      "jobs", po::value<int>()->default_value(1),
+      "threads running the starts (same result for any value)")(
+      "keep-best",
+      "write --out even when the fit is not verified converged (the best admissible point, "
+      "named as such in the file)")(
       "start-spread", po::value<std::string>()->default_value("2"),
       "Latin hypercube half-width in log space")("burn-in", po::value<int>()->default_value(0),
                                                  "updates skipped at the start of each dataset")(
@@ -596,6 +643,7 @@ int RunTune(const std::vector<std::string>& args) {
     throw InputError("--r-param: white-accel applies to Q only");
   options.form = ParseTunerForm(vm["form"].as<std::string>());
   options.starts = vm["starts"].as<int>();
+  options.jobs = vm["jobs"].as<int>();
   options.start_spread = ParseNumber(vm["start-spread"].as<std::string>(), "--start-spread");
   options.burn_in = vm["burn-in"].as<int>();
   options.bound_width = ParseNumber(vm["bound-width"].as<std::string>(), "--bound-width");
@@ -705,11 +753,16 @@ int RunTune(const std::vector<std::string>& args) {
   std::vector<Validation> validations;
   if (result.IsSolutionUsable() && vm.count("validate"))
     validations = ValidateAll(vm, model, spec, result.tuned_spec, options.burn_in, horizon);
-  if (result.IsSolutionUsable() && out) {
+  const bool write_out =
+      out && (result.IsConverged() || (result.IsSolutionUsable() && vm.count("keep-best")));
+  if (write_out) {
     out->stream() << "# estlab tune: model " << model.name << ", measurement " << spec.measurement
                   << ", filter " << FilterKindName(spec.kind()) << ", NLL "
                   << FormatDouble(result.nll_initial) << " -> " << FormatDouble(result.nll_tuned)
                   << " (" << TuneStatusName(result.status) << ")\n";
+    if (!result.IsConverged())
+      out->stream() << "# NOT A VERIFIED FIT (--keep-best): the best admissible point found; "
+                    << result.message << "\n";
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
     out->stream() << IniLine("r", result.r_param, false, 0.0, result.r, m);
     for (size_t i = 0; i < result.param_names.size(); ++i)
@@ -718,33 +771,29 @@ int RunTune(const std::vector<std::string>& args) {
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << ResultJson(model, spec, result, validations,
-                            result.IsSolutionUsable() ? out_path : "", profile, profile_files)
+    std::cout << ResultJson(model, spec, result, validations, write_out ? out_path : "",
+                            profile, profile_files)
               << "\n";
   } else {
     PrintHuman(model, spec, result, datasets.size(), validations, horizon,
-               result.IsSolutionUsable() ? out_path : "");
+               write_out ? out_path : "");
     if (profile) PrintProfile(*profile, profile_files, profile_message);
   }
-  if (!result.IsSolutionUsable()) {
-    std::cerr << "estlab: error: " << result.message << "\n";
+  if (!result.IsConverged()) {
+    std::cerr << "estlab: error: tune: status " << TuneStatusName(result.status) << ": "
+              << result.message
+              << (out && !write_out ? "; no --out file written (--keep-best writes the best "
+                                      "admissible point)"
+                                    : "")
+              << "\n";
     return 1;
   }
   if (vm.count("plot")) {
-    // From the start point (iteration 0): EM's history has it; a Ceres
-    // start reports iterations 1, 2, ... after it (least squares: its cost,
-    // whose start value is not kept).
-    const bool least_squares = options.form == TunerForm::kLeastSquares;
-    std::vector<double> history = result.nll_history;
-    if (history.empty() && result.best_start >= 0 &&
-        size_t(result.best_start) < log.by_start.size()) {
-      if (!least_squares) history = {result.starts[result.best_start].nll_start};
-      const auto& h = log.by_start[result.best_start];
-      history.insert(history.end(), h.begin(), h.end());
-    }
-    if (!PlotTuned(vm, model, result.tuned_spec, history,
-                   least_squares ? "least-squares cost" : "NLL"))
-      return 1;
+    // From the start point (iteration 0): EM's history, or the best start's
+    // NLL at every accepted iterate (both forms trace the NLL).
+    const std::vector<double> history = result.nll_history.empty() ? result.trace
+                                                                   : result.nll_history;
+    if (!PlotTuned(vm, model, result.tuned_spec, history, "NLL")) return 1;
   }
   return 0;
 }

@@ -1,0 +1,223 @@
+// Projected L-BFGS with an active set; the equations are in bounded_lbfgs.h.
+#include "adaptive/bounded_lbfgs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+
+#include "src/core/types.h"
+
+namespace estlab {
+
+bool BoundedLbfgsOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (max_iterations < 0) return fail("max_iterations must be >= 0");
+  if (memory < 1) return fail("memory must be >= 1");
+  if (!(function_tolerance >= 0) || !(gradient_tolerance >= 0) || !(parameter_tolerance >= 0))
+    return fail("tolerances must be >= 0");
+  if (!(sufficient_decrease > 0 && sufficient_decrease < 1))
+    return fail("sufficient_decrease must be in (0, 1)");
+  if (max_backtracks < 1) return fail("max_backtracks must be >= 1");
+  return true;
+}
+
+namespace {
+
+using Vector = std::vector<double>;
+
+double Dot(const Vector& a, const Vector& b) {
+  double s = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+  return s;
+}
+
+double MaxNorm(const Vector& a) {
+  double m = 0.0;
+  for (double v : a) m = std::max(m, std::abs(v));
+  return m;
+}
+
+// The state of the iteration: the current point, its value and gradient,
+// the box and the curvature pairs.
+struct State {
+  Vector x, g, lower, upper;
+  double f = 0.0;
+  std::deque<std::pair<Vector, Vector>> pairs;  // (s, y), oldest first
+};
+
+Vector Project(const State& st, const Vector& x) {
+  Vector p(x.size());
+  for (size_t i = 0; i < x.size(); ++i) p[i] = std::clamp(x[i], st.lower[i], st.upper[i]);
+  return p;
+}
+
+// Step 1: |x - P(x - g)|_inf.
+double ProjectedGradientNorm(const State& st) {
+  double m = 0.0;
+  for (size_t i = 0; i < st.x.size(); ++i)
+    m = std::max(m, std::abs(st.x[i] - std::clamp(st.x[i] - st.g[i], st.lower[i], st.upper[i])));
+  return m;
+}
+
+// Step 2: whether x_i is held at a bound by its gradient.
+std::vector<bool> ActiveSet(const State& st) {
+  std::vector<bool> active(st.x.size(), false);
+  for (size_t i = 0; i < st.x.size(); ++i)
+    active[i] = (st.x[i] <= st.lower[i] && st.g[i] > 0) || (st.x[i] >= st.upper[i] && st.g[i] < 0);
+  return active;
+}
+
+// Step 3: -H g on the free set by the two-loop recursion; -g there when the
+// memory is empty or the result does not descend.
+Vector Direction(State* st, const std::vector<bool>& active) {
+  const size_t k = st->x.size();
+  Vector q(k);
+  for (size_t i = 0; i < k; ++i) q[i] = active[i] ? 0.0 : st->g[i];
+  std::vector<double> alpha(st->pairs.size());
+  for (size_t j = st->pairs.size(); j-- > 0;) {
+    const auto& [s, y] = st->pairs[j];
+    alpha[j] = Dot(s, q) / Dot(y, s);
+    for (size_t i = 0; i < k; ++i) q[i] -= alpha[j] * y[i];
+  }
+  if (!st->pairs.empty()) {
+    const auto& [s, y] = st->pairs.back();
+    const double gamma = Dot(s, y) / Dot(y, y);
+    for (double& v : q) v *= gamma;
+  }
+  for (size_t j = 0; j < st->pairs.size(); ++j) {
+    const auto& [s, y] = st->pairs[j];
+    const double beta = Dot(y, q) / Dot(y, s);
+    for (size_t i = 0; i < k; ++i) q[i] += s[i] * (alpha[j] - beta);
+  }
+  Vector d(k);
+  for (size_t i = 0; i < k; ++i) d[i] = active[i] ? 0.0 : -q[i];
+  if (Dot(d, st->g) < 0.0) return d;
+  st->pairs.clear();
+  for (size_t i = 0; i < k; ++i) d[i] = active[i] ? 0.0 : -st->g[i];
+  return d;
+}
+
+struct Trial {
+  bool accepted = false;
+  Vector x, g;
+  double f = 0.0;
+  double first_predicted = 0.0;  // -g^T (x(a0) - x_k): the full step's first-order decrease
+};
+
+// Step 4: projected backtracking from a0 along d.
+Trial LineSearch(const BoundedObjective& f, const State& st, const Vector& d, double a0,
+                 const BoundedLbfgsOptions& o, long* evaluations) {
+  Trial t;
+  t.g.resize(st.x.size());
+  double a = a0;
+  for (int b = 0; b < o.max_backtracks; ++b, a *= 0.5) {
+    Vector trial(st.x.size());
+    for (size_t i = 0; i < trial.size(); ++i) trial[i] = st.x[i] + a * d[i];
+    trial = Project(st, trial);
+    Vector step(trial.size());
+    for (size_t i = 0; i < step.size(); ++i) step[i] = trial[i] - st.x[i];
+    const double predicted = Dot(st.g, step);  // < 0
+    if (b == 0) t.first_predicted = -predicted;
+    if (MaxNorm(step) == 0.0) break;
+    double value = 0.0;
+    ++*evaluations;
+    if (!f(trial.data(), &value, t.g.data()) || !std::isfinite(value)) continue;
+    if (value <= st.f + o.sufficient_decrease * predicted && value < st.f) {
+      t.accepted = true;
+      t.x = trial;
+      t.f = value;
+      return t;
+    }
+  }
+  return t;
+}
+
+// Adds the pair (s, y) when it has positive curvature.
+void Remember(State* st, const Vector& x_new, const Vector& g_new, int memory) {
+  Vector s(x_new.size()), y(x_new.size());
+  for (size_t i = 0; i < s.size(); ++i) s[i] = x_new[i] - st->x[i], y[i] = g_new[i] - st->g[i];
+  const double sy = Dot(s, y);
+  if (!(sy > 1e-12 * std::sqrt(Dot(s, s) * Dot(y, y)))) return;
+  st->pairs.emplace_back(std::move(s), std::move(y));
+  if (int(st->pairs.size()) > memory) st->pairs.pop_front();
+}
+
+}  // namespace
+
+BoundedLbfgsSummary MinimizeBounded(const BoundedObjective& f, const Vector& lower,
+                                    const Vector& upper, const BoundedLbfgsOptions& o, Vector* x,
+                                    const BoundedIterationCallback& callback) {
+  BoundedLbfgsSummary sum;
+  State st;
+  st.x = *x, st.g = Vector(x->size()), st.lower = lower, st.upper = upper;
+  st.x = Project(st, st.x);
+  *x = st.x;
+  ++sum.evaluations;
+  if (!f(st.x.data(), &st.f, st.g.data()) || !std::isfinite(st.f)) {
+    sum.message = "the objective cannot be evaluated at the start point";
+    return sum;
+  }
+  sum.usable = true;
+  sum.initial_cost = sum.final_cost = st.f;
+  bool retried = false;
+  while (true) {
+    const double pg = ProjectedGradientNorm(st);
+    if (pg <= o.gradient_tolerance) {
+      sum.converged = true;
+      sum.message = "Projected gradient tolerance reached. |pg|_inf = " + FormatNumber(pg);
+      break;
+    }
+    if (sum.iterations >= o.max_iterations) {
+      sum.message = "Maximum number of iterations reached (" + std::to_string(o.max_iterations) +
+                    "), |pg|_inf = " + FormatNumber(pg);
+      break;
+    }
+    const Vector d = Direction(&st, ActiveSet(st));
+    const double a0 = st.pairs.empty() ? std::min(1.0, 1.0 / std::max(MaxNorm(d), 1e-300)) : 1.0;
+    const Trial t = LineSearch(f, st, d, a0, o, &sum.evaluations);
+    if (!t.accepted) {
+      if (!st.pairs.empty() && !retried) {  // the curvature memory misleads: drop it once
+        st.pairs.clear();
+        retried = true;
+        continue;
+      }
+      // Even the first trial step promised a decrease below the rounding of f.
+      sum.converged = t.first_predicted <= 1e-8 * std::max(1.0, std::abs(st.f));
+      sum.message = sum.converged ? "No decrease measurable within rounding. |pg|_inf = " +
+                                        FormatNumber(pg)
+                                  : "Line search failed: no decrease along the projected "
+                                    "gradient. |pg|_inf = " +
+                                        FormatNumber(pg);
+      break;
+    }
+    retried = false;
+    ++sum.iterations;
+    const double change = t.f - st.f;
+    double step = 0.0;
+    for (size_t i = 0; i < st.x.size(); ++i) step = std::max(step, std::abs(t.x[i] - st.x[i]));
+    Remember(&st, t.x, t.g, o.memory);
+    const double f_old = st.f;
+    st.x = t.x, st.g = t.g, st.f = t.f;
+    if (callback) callback(sum.iterations, st.x, st.f, change);
+    if (std::abs(change) <= o.function_tolerance * std::abs(f_old)) {
+      sum.converged = true;
+      sum.message = "Function tolerance reached. |df|/|f| = " +
+                    FormatNumber(std::abs(change) / std::max(std::abs(f_old), 1e-300));
+      break;
+    }
+    if (step <= o.parameter_tolerance * (MaxNorm(st.x) + o.parameter_tolerance)) {
+      sum.converged = true;
+      sum.message = "Parameter tolerance reached. |dx|_inf = " + FormatNumber(step);
+      break;
+    }
+  }
+  *x = st.x;
+  sum.final_cost = st.f;
+  return sum;
+}
+
+}  // namespace estlab

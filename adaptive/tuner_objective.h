@@ -1,0 +1,176 @@
+// The tuner's objective (part of the tuner, adaptive/tuner_impl.h): the NLL of
+// adaptive/likelihood.h with its exact gradient, and the least-squares
+// residuals with their Jacobian.
+//
+// Gradients. The L-BFGS form (ceres::GradientProblemSolver) gets the exact
+// gradient of the NLL by forward-mode AD: the recursion runs on
+// ceres::Jet<double, C> with C = 2 (K <= 2) or 4 directions per pass; more
+// than 4 parameters are done in ceil(K / 4) passes (chunking, as
+// ceres::DynamicAutoDiffCostFunction does), so only two Jet sizes are
+// instantiated per model and measurement (compile time on 2 cores). C = 4
+// rather than 8: the single-pendulum joint fit (K = 4, EKF) took 5.3 s with
+// one Jet<8> pass and 1.3 s with one Jet<4> pass (the nested Jets of the EKF
+// grow with C times the state dimension). The EKF's Jacobians of the
+// fixed-step map need second derivatives for that and use NestedJet
+// (src/ode/nested_jet.h). With a CVODES process model the same Jets run
+// through CVODES forward sensitivities in theta (src/ode/cvodes_theta_flow.h).
+//
+// The least-squares form (Levenberg-Marquardt, ceres::Solver with bounds)
+// minimises 1/2 sum r^2 over the residuals
+//   e_k = L_k^-1 nu_k   (m per update)   and   sqrt(log det S_k + c)  (one per update),
+// which is NLL + const. c = log_det_margin * m - min_k log det S_k at the
+// start point, kept while that start runs; a trial point where
+// log det S_k + c <= 0 is infeasible. Its Jacobian uses the same chunked Jets.
+//
+#ifndef ESTLAB_ADAPTIVE_TUNER_OBJECTIVE_H_
+#define ESTLAB_ADAPTIVE_TUNER_OBJECTIVE_H_
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "adaptive/likelihood.h"
+
+namespace estlab {
+namespace tuner_internal {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// NLL and its gradient / the least-squares residuals and their Jacobian, by
+// chunked forward AD.
+template <class Model, class Meas>
+class Objective {
+ public:
+  static constexpr int kM = Meas::kDim;
+  explicit Objective(const InnovationLikelihood<Model, Meas>& likelihood)
+      : lik_(likelihood), k_(likelihood.NumParams()) {}
+
+  int NumParams() const { return k_; }
+  const InnovationLikelihood<Model, Meas>& likelihood() const { return lik_; }
+
+  bool Value(const double* theta, double* nll) const { return lik_.Nll(theta, nll); }
+
+  // NLL and gradient (gradient may be null).
+  bool ValueAndGradient(const double* theta, double* nll, double* gradient) const {
+    if (gradient == nullptr || k_ == 0) return Value(theta, nll);
+    bool ok;
+    if (k_ <= 2) {
+      ok = ChunkedGradient<2>(theta, nll, gradient);
+    } else {
+      ok = ChunkedGradient<4>(theta, nll, gradient);
+    }
+    if (!ok) return false;
+    for (int i = 0; i < k_; ++i)
+      if (!std::isfinite(gradient[i])) return false;
+    return std::isfinite(*nll);
+  }
+
+  // (m + 1) per update, then one per prior of a physical parameter.
+  long NumResiduals() const { return lik_.NumTerms() * (kM + 1) + lik_.physical().NumPriors(); }
+
+  // The least-squares residuals; jacobian (row-major NumResiduals x K) may be
+  // null.
+  bool Residuals(const double* theta, double c, double* residuals, double* jacobian) const {
+    if (jacobian == nullptr || k_ == 0) return ResidualsT<double>(theta, c, residuals);
+    if (k_ <= 2) return ChunkedResiduals<2>(theta, c, residuals, jacobian);
+    return ChunkedResiduals<4>(theta, c, residuals, jacobian);
+  }
+
+  // min_k log det S_k at theta (for the constant c), false if the filter fails.
+  bool MinLogDet(const double* theta, double* min_log_det) const {
+    double lo = kInf;
+    const bool ok = lik_.template Run<double>(
+        theta, [&](const Vec<double, kM>&, const double& ld) { lo = std::min(lo, ld); });
+    *min_log_det = lo;
+    return ok && std::isfinite(lo);
+  }
+
+ private:
+  template <int C>
+  std::vector<ceres::Jet<double, C>> Seed(const double* theta, int first) const {
+    std::vector<ceres::Jet<double, C>> th(k_);
+    for (int i = 0; i < k_; ++i) {
+      th[i] = ceres::Jet<double, C>(theta[i]);
+      if (i >= first && i < first + C) th[i].v[i - first] = 1.0;
+    }
+    return th;
+  }
+
+  template <int C>
+  bool ChunkedGradient(const double* theta, double* nll, double* gradient) const {
+    for (int first = 0; first < k_; first += C) {
+      const std::vector<ceres::Jet<double, C>> th = Seed<C>(theta, first);
+      ceres::Jet<double, C> f;
+      if (!lik_.Nll(th.data(), &f)) return false;
+      *nll = f.a;
+      for (int i = first; i < std::min(k_, first + C); ++i) gradient[i] = f.v[i - first];
+    }
+    return true;
+  }
+
+  template <class T>
+  bool ResidualsT(const T* theta, double c, T* residuals) const {
+    long at = 0;
+    bool positive = true;
+    const bool ok =
+        lik_.template Run<T>(theta, [&](const Eigen::Matrix<T, kM, 1>& e, const T& log_det) {
+          using std::sqrt;
+          for (int j = 0; j < kM; ++j) residuals[at++] = e(j);
+          const T arg = log_det + c;
+          if (!(ScalarPart(arg) > 0)) positive = false;
+          residuals[at++] = positive ? sqrt(arg) : T(0.0);
+        });
+    lik_.physical().ForEachPriorResidual(theta + lik_.NumNoiseParams(),
+                                         [&](const T& r) { residuals[at++] = r; });
+    return ok && positive && at == NumResiduals();
+  }
+
+  template <int C>
+  bool ChunkedResiduals(const double* theta, double c, double* residuals, double* jacobian) const {
+    const long rows = NumResiduals();
+    std::vector<ceres::Jet<double, C>> r(rows);
+    for (int first = 0; first < k_; first += C) {
+      const std::vector<ceres::Jet<double, C>> th = Seed<C>(theta, first);
+      if (!ResidualsT<ceres::Jet<double, C>>(th.data(), c, r.data())) return false;
+      for (long row = 0; row < rows; ++row) {
+        residuals[row] = r[row].a;
+        for (int i = first; i < std::min(k_, first + C); ++i)
+          jacobian[row * k_ + i] = r[row].v[i - first];
+      }
+    }
+    for (long row = 0; row < rows; ++row)
+      if (!std::isfinite(residuals[row])) return false;
+    return true;
+  }
+
+  const InnovationLikelihood<Model, Meas>& lik_;
+  int k_;
+};
+
+// Levenberg-Marquardt cost: whitened innovations and log-det residuals.
+template <class Model, class Meas>
+class LeastSquaresCost final : public ceres::CostFunction {
+ public:
+  LeastSquaresCost(const Objective<Model, Meas>& objective, double c)
+      : objective_(objective), c_(c) {
+    set_num_residuals(int(objective.NumResiduals()));
+    mutable_parameter_block_sizes()->push_back(objective.NumParams());
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    return objective_.Residuals(parameters[0], c_, residuals,
+                                jacobians != nullptr ? jacobians[0] : nullptr);
+  }
+
+ private:
+  const Objective<Model, Meas>& objective_;
+  double c_;
+};
+
+}  // namespace tuner_internal
+}  // namespace estlab
+
+#endif  // ESTLAB_ADAPTIVE_TUNER_OBJECTIVE_H_
