@@ -384,7 +384,7 @@ void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
   // The same verdict as the ml form's (adaptive/tune_verdict.h): Q's and R's
   // log parameters have their constraint's 0 as lower bound.
   const Eigen::MatrixXd H = FinishTune(objective, spec, options, lower, upper, &result);
-  ApplyVerdict(H, result.is_log, lower, upper, &result);
+  ApplyVerdict(H, result.is_log, lower, upper, NllFunction(objective), &result);
 }
 
 }  // namespace tuner_internal

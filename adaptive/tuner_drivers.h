@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <utility>
 #include <vector>
 
 #include "adaptive/bounded_lbfgs.h"
@@ -21,23 +23,25 @@ namespace estlab {
 namespace tuner_internal {
 
 // Forwards every successful Ceres iteration (after the zeroth, the start
-// point) to TunerOptions::progress and to start->trace as the NLL (the
-// least-squares cost is the NLL minus a constant, fixed at iteration 0 from
-// start->nll_scaled), with its point theta (update_state_every_iteration).
+// point) to start->trace with its point (update_state_every_iteration) and
+// to TunerOptions::progress. The value is the NLL there, evaluated anew
+// (nll(theta)): the least-squares cost is the NLL only up to a constant and
+// the Jets' rounding.
 class ProgressCallback final : public ceres::IterationCallback {
  public:
   ProgressCallback(const TunerOptions& o, const TuneProgress& where, const double* theta, int k,
-                   TuneStart* start)
-      : o_(o), where_(where), theta_(theta), k_(k), start_(start) {}
+                   std::function<double(const double*)> nll, TuneStart* start)
+      : o_(o), where_(where), theta_(theta), k_(k), nll_(std::move(nll)), start_(start) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
-    if (it.iteration == 0) offset_ = start_->nll_scaled - it.cost;
     if (it.iteration > 0 && it.step_is_successful) {
-      start_->trace.push_back(it.cost + offset_);
+      const double value = nll_(theta_);
+      const double change = value - start_->trace.back();
+      start_->trace.push_back(value);
       start_->trace_theta.emplace_back(theta_, theta_ + k_);
       if (o_.progress) {
         where_.iteration = it.iteration;
-        where_.value = it.cost + offset_;
-        where_.change = -it.cost_change;
+        where_.value = value;
+        where_.change = change;
         o_.progress(where_);
       }
     }
@@ -49,8 +53,8 @@ class ProgressCallback final : public ceres::IterationCallback {
   TuneProgress where_;
   const double* theta_;
   int k_;
+  std::function<double(const double*)> nll_;
   TuneStart* start_;
-  double offset_ = 0.0;
 };
 
 // One L-BFGS start from theta (inside the box): the projected L-BFGS of
@@ -135,7 +139,11 @@ TuneStart RunLeastSquares(const Objective<Model, Meas>& objective, const TunerOp
   SetBounds(lower, upper, theta.data(), &problem);
   start.trace = {start.nll_scaled};
   start.trace_theta = {theta};
-  ProgressCallback progress(o, where, theta.data(), int(theta.size()), &start);
+  auto nll = [&](const double* x) {
+    double f = kInf;
+    return objective.Value(x, &f) ? f : kInf;
+  };
+  ProgressCallback progress(o, where, theta.data(), int(theta.size()), nll, &start);
   ceres::Solver::Options so = LevenbergMarquardtOptions(o);
   so.update_state_every_iteration = true;
   so.callbacks.push_back(&progress);

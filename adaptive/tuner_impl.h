@@ -105,7 +105,7 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   }
   if (!PickBest(&result)) return finish();
   const Eigen::MatrixXd H = FinishTune(objective, spec, options, lower, upper, &result);
-  ApplyVerdict(H, lower_is_constraint, lower, upper, &result);
+  ApplyVerdict(H, lower_is_constraint, lower, upper, NllFunction(objective), &result);
   return finish();
 }
 

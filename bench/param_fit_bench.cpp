@@ -83,6 +83,24 @@ void JointFit(benchmark::State& state, Integrator integrator) {
   state.counters["lbfgs_iterations"] = iterations;
 }
 
+// Four starts of the RK4 joint fit (spread over L, b, qc, R) on `jobs`
+// threads: the jobs-2 / jobs-1 wall ratio of issue 33 (<= 0.6).
+void JointFitStarts(benchmark::State& state, int jobs) {
+  const std::vector<FilterData> data = Recording();
+  const ModelEntry& model = FindModel("pendulum");
+  TunerOptions o = Options();
+  o.starts = 4;
+  o.jobs = jobs;
+  for (auto _ : state) {
+    const TuneResult r = model.tune(Spec(Integrator::kRk4), o, data);
+    if (!r.IsSolutionUsable()) {
+      state.SkipWithError(r.message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(r.nll_tuned);
+  }
+}
+
 void Likelihood(benchmark::State& state, Integrator integrator, bool gradient) {
   const std::vector<FilterData> data = Recording();
   const InnovationLikelihood<P, P::Angle> lik(Spec(integrator), Options(), data);
@@ -111,6 +129,16 @@ BENCHMARK_CAPTURE(JointFit, cvodes, Integrator::kCvodes)
     ->Name("JointFit/pendulum/single-recording-4x9167/ekf-cvodes/L-b-qc-r")
     ->Unit(kMs)
     ->Iterations(1);
+BENCHMARK_CAPTURE(JointFitStarts, jobs1, 1)
+    ->Name("JointFit/pendulum/single-recording-4x9167/ekf-rk4/L-b-qc-r/starts4/jobs1")
+    ->Unit(kMs)
+    ->Iterations(1)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(JointFitStarts, jobs2, 2)
+    ->Name("JointFit/pendulum/single-recording-4x9167/ekf-rk4/L-b-qc-r/starts4/jobs2")
+    ->Unit(kMs)
+    ->Iterations(1)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Likelihood, rk4_nll, Integrator::kRk4, false)
     ->Name("Likelihood/pendulum/single-recording/ekf-rk4/nll")
     ->Unit(kMs);
