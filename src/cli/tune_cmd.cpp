@@ -102,8 +102,9 @@ cvodes, CVODES forward sensitivities in theta of the state (and, for the
 EKF, of the flow Jacobian's variational system) carry the same derivatives,
 with CVODES run at rtol <= 1e-10, atol <= 1e-12.
 
-Estimators: ml (default) minimises that NLL with Ceres. em alternates the
-filter's smoother (kf -> RTS, ekf -> ERTS, ukf/ckf/ghkf -> sigma-point RTS)
+Estimators: ml (default) minimises that NLL (projected L-BFGS, or Ceres'
+Levenberg-Marquardt with --form least-squares). em alternates the filter's
+smoother (kf -> RTS, ekf -> ERTS, ukf/ckf/ghkf -> sigma-point RTS)
 with the closed-form maximiser of Q and R for each --q-param/--r-param; exact
 for the kf, where the NLL never rises from one iteration to the next, and an
 approximation otherwise (the report counts rises and gives the ml NLL reached
@@ -149,7 +150,7 @@ The convergence trace ("trace" in the JSON, the progress line and the
 point.
 
 Output: a table (or --json) with the tuned Q and R, the NLL before and after,
-Ceres' termination, and the standard error of every log parameter from the
+the optimiser's termination, and the standard error of every log parameter from the
 curvature of the NLL; a parameter with SE > 1 is 'poorly identified by this
 data'. --out writes the tuned noise as 'q-diag = ...' / 'q = ...' /
 'q-white-accel = ...' and 'r-diag = ...' / 'r = ...' lines, the option names of
@@ -314,7 +315,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
               << (r.nll_increases ? ", NLL rose at " + std::to_string(r.nll_increases) : "")
               << ")\n";
   } else {
-    std::cout << "Ceres         " << r.termination << " (" << r.iterations << " iterations, start "
+    std::cout << "optimiser     " << r.termination << " (" << r.iterations << " iterations, start "
               << r.best_start + 1 << ")\n";
   }
   std::cout << "NLL           initial " << r.nll_initial << "   tuned " << r.nll_tuned << "\n";
@@ -533,7 +534,7 @@ std::vector<double> BoundList(const po::variables_map& vm, const std::string& op
 
 int RunTune(const std::vector<std::string>& args) {
   po::options_description desc(
-      "estlab tune: tune Q and R by maximum innovation likelihood (Ceres)");
+      "estlab tune: tune Q and R by maximum innovation likelihood");
   desc.add_options()("help,h", "this text")(
       "data", po::value<std::vector<std::string>>()->composing(), "training data CSV (repeatable)")(
       "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
@@ -559,7 +560,7 @@ int RunTune(const std::vector<std::string>& args) {
       "lower bound(s) of the log parameters: one, or one per parameter")(
       "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
       "max-iterations", po::value<int>(),
-      "Ceres iterations per start (default 200), EM iterations (default 1000)")(
+      "optimiser iterations per start (default 200), EM iterations (default 1000)")(
       "max-integrator-steps", po::value<long>()->default_value(200),
       "--integrator cvodes: CVODES steps per interval allowed at a trial point, on average "
       "(+10^4; x5 for a stiff model), 100x in one interval; a point needing more is "
@@ -571,7 +572,7 @@ int RunTune(const std::vector<std::string>& args) {
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
       "estimator", po::value<std::string>()->default_value("ml"),
-      "ml (prediction-error maximum likelihood, Ceres) | em (expectation-maximisation, the "
+      "ml (prediction-error maximum likelihood) | em (expectation-maximisation, the "
       "smoother as E-step) | als (autocovariance least squares, kf/ekf) | output-error (free "
       "simulation, least squares)")("lags", po::value<int>()->default_value(10),
                                     "als: innovation autocovariance lags 0..N-1 fitted")(
