@@ -187,11 +187,11 @@ BoundedLbfgsSummary MinimizeBounded(const BoundedObjective& f, const Vector& low
       }
       // Even the first trial step promised a decrease below the rounding of f.
       sum.converged = t.first_predicted <= 1e-8 * std::max(1.0, std::abs(st.f));
-      sum.message = sum.converged ? "No decrease measurable within rounding. |pg|_inf = " +
-                                        FormatNumber(pg)
-                                  : "Line search failed: no decrease along the projected "
-                                    "gradient. |pg|_inf = " +
-                                        FormatNumber(pg);
+      sum.message = sum.converged
+                        ? "No decrease measurable within rounding. |pg|_inf = " + FormatNumber(pg)
+                        : "Line search failed: no decrease along the projected "
+                          "gradient. |pg|_inf = " +
+                              FormatNumber(pg);
       break;
     }
     retried = false;

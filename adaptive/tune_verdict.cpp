@@ -71,9 +71,8 @@ std::string NotAMinimumSentence(double lambda, const Eigen::VectorXd& v, double 
 }
 
 // The first parameter ending against a bound that is not its constraint.
-int AgainstSearchBox(const std::vector<bool>& lower_is_constraint,
-                     const std::vector<double>& lower, const std::vector<double>& upper,
-                     const TuneResult& r) {
+int AgainstSearchBox(const std::vector<bool>& lower_is_constraint, const std::vector<double>& lower,
+                     const std::vector<double>& upper, const TuneResult& r) {
   for (size_t i = 0; i < r.theta.size(); ++i) {
     const int side = NearBound(r.theta[i], lower[i], upper[i], r.is_log[i]);
     if (side > 0 || (side < 0 && !lower_is_constraint[i])) return int(i);

@@ -287,8 +287,8 @@ void PrintStarts(const TuneResult& r) {
   for (size_t s = 0; s < r.starts.size(); ++s) {
     const TuneStart& st = r.starts[s];
     std::cout << "  " << std::setw(3) << s + 1 << (int(s) == r.best_start ? "*" : " ") << " "
-              << std::setw(12) << st.nll_start << " -> " << std::setw(12) << st.nll_scaled
-              << " -> " << std::setw(12) << st.nll_end << "  (" << st.iterations << ", "
+              << std::setw(12) << st.nll_start << " -> " << std::setw(12) << st.nll_scaled << " -> "
+              << std::setw(12) << st.nll_end << "  (" << st.iterations << ", "
               << (st.ok ? (st.converged ? "converged" : "not converged") : "failed") << ")\n";
   }
 }
@@ -533,8 +533,7 @@ std::vector<double> BoundList(const po::variables_map& vm, const std::string& op
 }  // namespace
 
 int RunTune(const std::vector<std::string>& args) {
-  po::options_description desc(
-      "estlab tune: tune Q and R by maximum innovation likelihood");
+  po::options_description desc("estlab tune: tune Q and R by maximum innovation likelihood");
   desc.add_options()("help,h", "this text")(
       "data", po::value<std::vector<std::string>>()->composing(), "training data CSV (repeatable)")(
       "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
@@ -549,10 +548,10 @@ int RunTune(const std::vector<std::string>& args) {
       "threads running the starts (same result for any value)")(
       "keep-best",
       "write --out even when the fit is not verified converged (the best admissible point, "
-      "named as such in the file)")(
-      "start-spread", po::value<std::string>()->default_value("2"),
-      "Latin hypercube half-width in log space")("burn-in", po::value<int>()->default_value(0),
-                                                 "updates skipped at the start of each dataset")(
+      "named as such in the file)")("start-spread", po::value<std::string>()->default_value("2"),
+                                    "Latin hypercube half-width in log space")(
+      "burn-in", po::value<int>()->default_value(0),
+      "updates skipped at the start of each dataset")(
       "form", po::value<std::string>()->default_value("lbfgs"), "lbfgs | least-squares")(
       "bound-width", po::value<std::string>()->default_value("20"),
       "log parameters within initial +- this")(
@@ -772,8 +771,8 @@ int RunTune(const std::vector<std::string>& args) {
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << ResultJson(model, spec, result, validations, write_out ? out_path : "",
-                            profile, profile_files)
+    std::cout << ResultJson(model, spec, result, validations, write_out ? out_path : "", profile,
+                            profile_files)
               << "\n";
   } else {
     PrintHuman(model, spec, result, datasets.size(), validations, horizon,
@@ -792,8 +791,8 @@ int RunTune(const std::vector<std::string>& args) {
   if (vm.count("plot")) {
     // From the start point (iteration 0): EM's history, or the best start's
     // NLL at every accepted iterate (both forms trace the NLL).
-    const std::vector<double> history = result.nll_history.empty() ? result.trace
-                                                                   : result.nll_history;
+    const std::vector<double> history =
+        result.nll_history.empty() ? result.trace : result.nll_history;
     if (!PlotTuned(vm, model, result.tuned_spec, history, "NLL")) return 1;
   }
   return 0;

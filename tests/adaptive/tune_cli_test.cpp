@@ -303,8 +303,7 @@ TEST_F(TuneCli, CvodesWorkPerTrialPointIsBounded) {
   // (no-convergence, exit 1), but no start fails.
   const CmdResult sane = Estlab(tune + "--init-q-diag 1e-4,1e-2 --init-r-diag 1");
   EXPECT_EQ(sane.out.find("\"status\": \"all-starts-"), std::string::npos) << sane.out;
-  EXPECT_EQ(sane.exit_code,
-            sane.out.find("\"status\": \"converged\"") != std::string::npos ? 0 : 1)
+  EXPECT_EQ(sane.exit_code, sane.out.find("\"status\": \"converged\"") != std::string::npos ? 0 : 1)
       << sane.err;
   const CmdResult absurd = Estlab(tune + "--init-q-white-accel 1e12 --init-r-diag 1e-12");
   EXPECT_TRUE(absurd.exit_code == 0 || absurd.exit_code == 1) << absurd.err;

@@ -64,8 +64,7 @@ struct TwoTank {
   static constexpr std::array<std::pair<int, int>, 0> kPositionRatePairs = {};
   template <class S = double>
   struct ParamsT {
-    S k = S(0.1), a1 = S(0.15), a2 = S(0.15), l1 = S(0.0), l2 = S(0.02), kof = S(0.5),
-      H1 = S(0.6);
+    S k = S(0.1), a1 = S(0.15), a2 = S(0.15), l1 = S(0.0), l2 = S(0.02), kof = S(0.5), H1 = S(0.6);
   };
   using Params = ParamsT<>;
   static constexpr std::array<ParamSpec<Params>, 7> kParams = {{
@@ -243,8 +242,7 @@ Eigen::MatrixXd ValueHessian(const std::function<double(const std::vector<double
 }
 
 struct PropertyCounts {
-  int starts = 0, converged_fits = 0, smooth_converged = 0, fits = 0, trace_points = 0,
-      probes = 0;
+  int starts = 0, converged_fits = 0, smooth_converged = 0, fits = 0, trace_points = 0, probes = 0;
 };
 
 // Checks one fit: every trace value against the NLL recomputed at its point;
@@ -308,8 +306,8 @@ void CheckFit(const InnovationLikelihood<Model, Meas>& lik, const TuneResult& r,
         for (size_t i = 0; i < x.size(); ++i) x[i] += sign * t * d[i];
         if (!admissible(x)) continue;
         ++counts->probes;
-        EXPECT_GE(nll(x), r.nll_tuned - margin) << "converged, but a lower point is " << t
-                                                << " away";
+        EXPECT_GE(nll(x), r.nll_tuned - margin)
+            << "converged, but a lower point is " << t << " away";
       }
 }
 
@@ -322,7 +320,7 @@ TEST(TunerVerdict, TwoHundredRandomStartsStayAdmissibleAndHonest) {
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const std::vector<FilterData> data = {TankData(100 + seed, 200, truth)};
     TunerOptions o = TankOptions();
-    o.estimate.push_back(EstimatedParam{.name = "a1"});                       // > 0: log
+    o.estimate.push_back(EstimatedParam{.name = "a1"});  // > 0: log
     o.estimate.push_back(EstimatedParam{.name = "a2", .lower = kA2Lower, .upper = kA2Upper});
     o.starts = 25;
     o.jobs = 2;
@@ -342,10 +340,11 @@ TEST(TunerVerdict, TwoHundredRandomStartsStayAdmissibleAndHonest) {
                 int(seed), r.form.c_str(), TuneStatusName(r.status), r.nll_initial, r.nll_tuned,
                 r.param_values[0], r.param_values[1], r.param_values[2], r.param_values[3]);
   }
-  std::printf("  %d starts, %d trace points, %ld right-hand sides evaluated while tuning, %ld "
-              "outside; %d of %d fits converged, %d probes around them\n",
-              counts.starts, counts.trace_points, evaluations, outside, counts.converged_fits,
-              counts.fits, counts.probes);
+  std::printf(
+      "  %d starts, %d trace points, %ld right-hand sides evaluated while tuning, %ld "
+      "outside; %d of %d fits converged, %d probes around them\n",
+      counts.starts, counts.trace_points, evaluations, outside, counts.converged_fits, counts.fits,
+      counts.probes);
   EXPECT_GE(counts.starts, 200);
   EXPECT_GT(evaluations, 100000);  // the counter is on the path
   EXPECT_EQ(outside, 0);
@@ -454,11 +453,12 @@ TEST(TunerVerdict, MultiStartOverParametersFindsTheDeeperWell) {
     CheckFit(lik, one, in_box, true, &counts);
     CheckFit(lik, many, in_box, true, &counts);
   }
-  std::printf("  the deeper well (a > 0) missed: single start %d/50, 6 starts %d/50; %d starts, "
-              "%d trace points, %d of %d fits converged with a positive semi-definite "
-              "Hessian\n",
-              single_fail, multi_fail, counts.starts, counts.trace_points,
-              counts.smooth_converged, counts.fits);
+  std::printf(
+      "  the deeper well (a > 0) missed: single start %d/50, 6 starts %d/50; %d starts, "
+      "%d trace points, %d of %d fits converged with a positive semi-definite "
+      "Hessian\n",
+      single_fail, multi_fail, counts.starts, counts.trace_points, counts.smooth_converged,
+      counts.fits);
   EXPECT_GE(single_fail, 15);  // >= 30 %
   EXPECT_LE(multi_fail, 2);    // found in >= 95 %
 }
@@ -576,14 +576,16 @@ TEST(TuneVerdictRules, NegativeCurvatureIsASaddleOnlyWhereALowerPointIsFound) {
   H << -4.0, 0.0, 0.0, 1.0;
   const std::vector<double> lo = {-1.0, -1.0}, hi = {1.0, 1.0};
   r.status = TuneStatus::kConverged;
-  ApplyVerdict(H, {false, false}, lo, hi,
-               [](const std::vector<double>& x) { return -2 * x[0] * x[0] + x[1] * x[1]; }, &r);
+  ApplyVerdict(
+      H, {false, false}, lo, hi,
+      [](const std::vector<double>& x) { return -2 * x[0] * x[0] + x[1] * x[1]; }, &r);
   EXPECT_EQ(r.status, TuneStatus::kNotAMinimum) << r.message;
   EXPECT_NE(r.message.find("along 1 a ("), std::string::npos) << r.message;
   r.status = TuneStatus::kConverged;
   r.message.clear();
-  ApplyVerdict(H, {false, false}, lo, hi,
-               [](const std::vector<double>& x) { return std::abs(x[0]) + x[1] * x[1]; }, &r);
+  ApplyVerdict(
+      H, {false, false}, lo, hi,
+      [](const std::vector<double>& x) { return std::abs(x[0]) + x[1] * x[1]; }, &r);
   EXPECT_EQ(r.status, TuneStatus::kConverged) << r.message;
   ASSERT_FALSE(r.identifiability.empty());
   EXPECT_NE(r.identifiability.back().find("not smooth here"), std::string::npos);
