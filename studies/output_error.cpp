@@ -14,7 +14,6 @@
 namespace estlab {
 namespace {
 
-
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
   if (d.t.size() < 2) throw InputError(d.path + ": output-error needs at least two rows");
@@ -22,65 +21,119 @@ double EvenStep(const FilterData& d) {
   for (size_t k = 1; k < d.t.size(); ++k) {
     if (std::abs(d.t[k] - d.t[k - 1] - dt) > 1e-6 * dt + 1e-12)
       throw InputError(d.path + ":" + std::to_string(d.lines[k]) +
-                       ": output-error needs evenly sampled data (step " + FormatNumber(dt) +
-                       ", here " + FormatNumber(d.t[k] - d.t[k - 1]) + ")");
+                       ": output-error windows need evenly sampled data (step " + FormatNumber(dt) +
+                       ", here " + FormatNumber(d.t[k] - d.t[k - 1]) +
+                       "); estimate the initial state (--estimate-x0) to simulate the whole "
+                       "record instead");
   }
   return dt;
 }
 
-void CheckRun(const ModelEntry& model, const FilterData& d) {
-  if (model.has_input) throw InputError("output-error: models with an input are not supported");
-  if (!d.has_truth)
-    throw InputError(d.path +
-                     ": output-error and free simulation start each window from the "
-                     "recorded state: the data need a column per state (map them with "
-                     "--column, e.g. theta=angle-pi)");
+// The free simulation of rows [first, first + count) of `d` from x0 at
+// t[first], with d's input (zero-order hold) or the spec's constant one.
+SimulationResult SimulateRows(const ModelEntry& model, const FilterSpec& spec, const FilterData& d,
+                              size_t first, size_t count, const std::vector<double>& x0) {
+  SimulationSpec s;
+  s.params = spec.params;
+  s.x0 = x0;
+  s.times.assign(d.t.begin() + long(first), d.t.begin() + long(first + count));
+  if (d.has_input) s.inputs.assign(d.u.begin() + long(first), d.u.begin() + long(first + count));
+  s.input = spec.input;
+  s.transition = spec.transition;
+  s.measurement = spec.measurement;
+  return model.simulate(s);
 }
 
-// Appends the free-simulation errors of one run to *e (row-major, outputs
-// fastest); false with *why when a simulation fails.
-bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData& d, double horizon,
-               std::vector<double>* e, long* windows, std::string* why) {
+// Appends the errors of rows [first + skip, first + count) of `d` against the
+// simulation `r` of rows [first, first + count) (outputs fastest).
+void AppendErrors(const MeasurementDesc& meas, const FilterData& d, const SimulationResult& r,
+                  size_t first, size_t count, size_t skip, std::vector<double>* e) {
+  const int m = int(meas.outputs.size());
+  const size_t first_z = r.columns.size() - size_t(m);  // t, states, z_<outputs>
+  for (size_t i = skip; i < count; ++i) {
+    for (int j = 0; j < m; ++j) {
+      const double z = d.z[(first + i) * m + j];
+      double err = std::isfinite(z) ? z - r.rows[i][first_z + j] : 0.0;
+      if (meas.angle_outputs[j]) err = WrapAngle(err);
+      e->push_back(err);
+    }
+  }
+}
+
+// Where one run's simulations start: windows from its recorded states, or
+// the whole record from x0.
+struct RunStart {
+  bool windows = false;
+  std::vector<double> x0;  // the whole record's start
+};
+
+// Appends the free-simulation errors of one run to *e; false with *why when
+// a simulation fails.
+bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData& d,
+               const RunStart& start, double horizon, std::vector<double>* e, long* windows,
+               std::string* why) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const int n = int(model.states.size()), m = int(meas.outputs.size());
-  const double dt = EvenStep(d);
+  const int n = int(model.states.size());
   const size_t rows = d.t.size();
-  const size_t per = std::max<size_t>(2, size_t(std::llround(horizon / dt)) + 1);
-  for (size_t w = 0; w + 1 < rows; w += per - 1) {
+  const size_t per =
+      start.windows ? std::max<size_t>(2, size_t(std::llround(horizon / EvenStep(d))) + 1) : rows;
+  for (size_t w = 0; w == 0 || w + 1 < rows; w += per - 1) {
     const size_t count = std::min(per, rows - w);
-    SimulationSpec s;
-    s.params = spec.params;
-    s.x0.assign(d.truth.begin() + long(w * n), d.truth.begin() + long((w + 1) * n));
-    s.t_end = double(count - 1) * dt;
-    s.dt = dt;
-    s.transition = spec.transition;
-    s.measurement = spec.measurement;
-    const SimulationResult r = model.simulate(s);
+    const std::vector<double> x0 = start.windows
+                                       ? std::vector<double>(d.truth.begin() + long(w * n),
+                                                             d.truth.begin() + long((w + 1) * n))
+                                       : start.x0;
+    const SimulationResult r = SimulateRows(model, spec, d, w, count, x0);
     if (!r.ok || r.rows.size() < count) {
       *why = "the simulation from " + d.path + " row " + std::to_string(w) +
              " (t = " + FormatNumber(d.t[w]) + ") failed: " + r.error;
       return false;
     }
     ++*windows;
-    const size_t first_z = r.columns.size() - size_t(m);  // t, states, z_<outputs>
-    for (size_t i = (w == 0 ? 0 : 1); i < count; ++i) {   // window starts counted once
-      for (int j = 0; j < m; ++j) {
-        const double z = d.z[(w + i) * m + j];
-        double err = std::isfinite(z) ? z - r.rows[i][first_z + j] : 0.0;
-        if (meas.angle_outputs[j]) err = WrapAngle(err);
-        e->push_back(err);
-      }
-    }
+    AppendErrors(meas, d, r, w, count, w == 0 ? 0 : 1, e);  // window starts counted once
+    if (count == rows) break;
   }
   return true;
 }
 
+// sqrt(mean e^2) per output (outputs fastest in e), scaled by the largest
+// |e| so that errors near the largest double (a diverged record) give a
+// finite RMSE rather than an overflowed inf.
+std::vector<double> Rmse(const std::vector<double>& e, int m) {
+  std::vector<double> scale(m, 0.0), sum(m, 0.0);
+  for (size_t i = 0; i < e.size(); ++i) scale[i % m] = std::max(scale[i % m], std::abs(e[i]));
+  for (size_t i = 0; i < e.size(); ++i) {
+    const double s = scale[i % m];
+    if (s > 0) sum[i % m] += (e[i] / s) * (e[i] / s);
+  }
+  for (int j = 0; j < m; ++j) sum[j] = scale[j] * std::sqrt(sum[j] / double(e.size() / size_t(m)));
+  return sum;
+}
+
+// theta -> (spec, each run's start): the parameters first, then the
+// estimated x0 components of each x0 row (one row, or one per run).
 struct ThetaMap {
   std::vector<int> index;  // into model.params
   std::vector<ThetaScale> scale;
-  FilterSpec At(const FilterSpec& spec, const double* theta) const {
+  std::vector<int> x0_index;            // estimated states
+  std::vector<std::vector<double>> x0;  // rows of whole initial states
+  std::vector<RunStart> starts;         // per run (x0 filled by At)
+  std::vector<size_t> x0_row;           // per run: its x0 row
+
+  FilterSpec At(const FilterSpec& spec, const double* theta,
+                std::vector<RunStart>* starts_at = nullptr) const {
     FilterSpec s = spec;
     for (size_t j = 0; j < index.size(); ++j) s.params[index[j]] = scale[j].Natural(theta[j]);
+    std::vector<std::vector<double>> rows = x0;
+    size_t at = index.size();
+    for (std::vector<double>& row : rows)
+      for (int i : x0_index) row[i] = theta[at++];
+    if (!rows.empty()) s.x0 = rows[0];
+    if (starts_at != nullptr) {
+      *starts_at = starts;
+      for (size_t r = 0; r < starts.size(); ++r)
+        if (!starts[r].windows) (*starts_at)[r].x0 = rows[x0_row[r]];
+    }
     return s;
   }
 };
@@ -97,10 +150,11 @@ class SimulationErrors {
     return true;
   }
   bool Errors(const double* theta, std::vector<double>* e, long* windows = nullptr) const {
-    const FilterSpec s = map_.At(spec_, theta);
+    std::vector<RunStart> starts;
+    const FilterSpec s = map_.At(spec_, theta, &starts);
     long w = 0;
-    for (const FilterData& d : runs_)
-      if (!RunErrors(model_, s, d, horizon_, e, &w, &why_)) return false;
+    for (size_t r = 0; r < runs_.size(); ++r)
+      if (!RunErrors(model_, s, runs_[r], starts[r], horizon_, e, &w, &why_)) return false;
     if (windows != nullptr) *windows = w;
     return true;
   }
@@ -115,11 +169,118 @@ class SimulationErrors {
   mutable std::string why_;
 };
 
-std::vector<double> Rmse(const std::vector<double>& e, int m) {
-  std::vector<double> sum(m, 0.0);
-  for (size_t i = 0; i < e.size(); ++i) sum[i % m] += e[i] * e[i];
-  for (double& v : sum) v = std::sqrt(v / double(e.size() / size_t(m)));
-  return sum;
+// The parameters of `estimate` into map and result (names, scales, bounds).
+void MapParams(const ModelEntry& model, const FilterSpec& spec,
+               const std::vector<EstimatedParam>& estimate, double bound_width, ThetaMap* map,
+               OutputErrorResult* r, std::vector<double>* lower, std::vector<double>* upper) {
+  std::vector<std::string> names;
+  for (const ParamDesc& d : model.params) names.push_back(d.name);
+  for (const EstimatedParam& e : estimate) {
+    const int found = FindEstimatedParam(e.name, names, model.name);
+    for (int i : map->index)
+      if (i == found) throw InputError("--estimate-param: '" + e.name + "' is named twice");
+    if (e.has_prior) throw InputError("--param-prior applies to --estimator ml only");
+    const double v = spec.params[found];
+    const ThetaScale s = ResolveThetaScale(e, model.params[found].constraint, v, bound_width);
+    map->index.push_back(found);
+    map->scale.push_back(s);
+    r->names.push_back((s.is_log ? "log " : "") + e.name);
+    r->is_log.push_back(s.is_log);
+    r->param_names.push_back(e.name);
+    r->param_initial.push_back(v);
+    r->theta_initial.push_back(s.theta0);
+    lower->push_back(s.lower);
+    upper->push_back(s.upper);
+  }
+}
+
+// Each run's start (windows or the whole record) and the estimated x0
+// components into map and result; InputError for a state that is not one,
+// a state named twice, x0_per_file with one run, or data with neither state
+// columns nor a whole-record start.
+void MapStarts(const ModelEntry& model, const FilterSpec& spec, const std::vector<FilterData>& runs,
+               const OutputErrorOptions& options, ThetaMap* map, OutputErrorResult* r,
+               std::vector<double>* lower, std::vector<double>* upper) {
+  for (const std::string& name : options.estimate_x0) {
+    const auto it = std::find(model.states.begin(), model.states.end(), name);
+    if (it == model.states.end()) {
+      std::string list;
+      for (const std::string& s : model.states) list += (list.empty() ? "" : ", ") + s;
+      throw InputError("--estimate-x0: '" + name + "' is not a state of model '" + model.name +
+                       "' (" + list + ")");
+    }
+    const int i = int(it - model.states.begin());
+    if (std::find(map->x0_index.begin(), map->x0_index.end(), i) != map->x0_index.end())
+      throw InputError("--estimate-x0: '" + name + "' is named twice");
+    map->x0_index.push_back(i);
+    r->x0_names.push_back(name);
+  }
+  if (options.x0_per_file && runs.size() < 2)
+    throw InputError("--x0-per-file needs two --data files or more (one x0 per file)");
+  if (options.x0_per_file && options.estimate_x0.empty())
+    throw InputError("--x0-per-file needs --estimate-x0 (the states estimated per file)");
+  const bool whole = !options.estimate_x0.empty();
+  const size_t rows = options.x0_per_file ? runs.size() : 1;
+  map->x0.assign(rows, spec.x0);
+  for (size_t row = 0; row < rows; ++row) {
+    for (size_t j = 0; j < map->x0_index.size(); ++j) {
+      const int i = map->x0_index[j];
+      r->names.push_back((rows > 1 ? "x0[" + std::to_string(row + 1) + "] " : "x0 ") +
+                         model.states[i]);
+      r->is_log.push_back(false);
+      r->theta_initial.push_back(spec.x0[i]);
+      lower->push_back(-std::numeric_limits<double>::infinity());
+      upper->push_back(std::numeric_limits<double>::infinity());
+    }
+  }
+  for (size_t k = 0; k < runs.size(); ++k) {
+    map->starts.push_back({.windows = !whole && runs[k].has_truth, .x0 = {}});
+    map->x0_row.push_back(options.x0_per_file ? k : 0);
+  }
+  for (const RunStart& s : map->starts)
+    if (!s.windows && spec.x0_first_sample)
+      throw InputError(
+          "output-error over the whole record starts from x0: give --x0 "
+          "(x0 = first-sample is not supported here) or --estimate-x0");
+  const bool windows = map->starts[0].windows;
+  r->start = windows ? "windows of the horizon from the recorded states"
+             : whole ? (options.x0_per_file ? "the whole record from each file's estimated x0"
+                                            : "the whole record from the estimated x0")
+                     : "the whole record from the prior mean x0 (--x0)";
+}
+
+// The standard errors and estimates on the natural scale, from the Jacobian
+// of the residuals at the fit.
+void StandardErrors(const ceres::CRSMatrix& jac, const ThetaMap& map,
+                    const std::vector<double>& lower, const std::vector<double>& upper,
+                    OutputErrorResult* r) {
+  const int k = int(map.index.size());
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(jac.num_rows, jac.num_cols);
+  for (int row = 0; row < jac.num_rows; ++row)
+    for (int i = jac.rows[row]; i < jac.rows[row + 1]; ++i) J(row, jac.cols[i]) = jac.values[i];
+  const Eigen::MatrixXd H = J.transpose() * J / (r->residual_sd * r->residual_sd);
+  const FisherReport report = AnalyseFisher(H, r->theta, r->names, r->is_log);
+  r->std_errors = report.std_errors;
+  r->identifiability = report.sentences;
+  for (int j = 0; j < k; ++j) {
+    const double v = map.scale[j].Natural(r->theta[j]);
+    r->param_values.push_back(v);
+    r->param_std_errors.push_back(map.scale[j].is_log ? v * r->std_errors[j] : r->std_errors[j]);
+    const double tol = 1e-6 * std::max(1.0, std::abs(r->theta[j]));
+    r->at_bound.push_back(std::abs(r->theta[j] - lower[j]) <= tol ||
+                          std::abs(r->theta[j] - upper[j]) <= tol);
+  }
+  int at = k;
+  for (size_t row = 0; row < map.x0.size() && !map.x0_index.empty(); ++row) {
+    std::vector<double> x0 = map.x0[row];
+    std::vector<double> se(x0.size(), std::nan(""));
+    for (int i : map.x0_index) {
+      x0[i] = r->theta[at];
+      se[i] = r->std_errors[at++];
+    }
+    r->x0.push_back(x0);
+    r->x0_std_errors.push_back(se);
+  }
 }
 
 }  // namespace
@@ -138,12 +299,29 @@ bool OutputErrorOptions::IsValid(std::string* error) const {
 
 std::vector<double> FreeSimulationRmse(const ModelEntry& model, const FilterSpec& spec,
                                        const FilterData& data, double horizon) {
-  CheckRun(model, data);
+  if (!data.has_truth)
+    throw InputError(data.path +
+                     ": free simulation over windows starts each window from the recorded "
+                     "state: the data need a column per state (map them with --column, e.g. "
+                     "theta=angle-pi)");
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   std::vector<double> e;
   long windows = 0;
   std::string why;
-  if (!RunErrors(model, spec, data, horizon, &e, &windows, &why) || e.empty())
+  if (!RunErrors(model, spec, data, {.windows = true, .x0 = {}}, horizon, &e, &windows, &why) ||
+      e.empty())
+    return std::vector<double>(m, std::nan(""));
+  return Rmse(e, m);
+}
+
+std::vector<double> WholeRecordRmse(const ModelEntry& model, const FilterSpec& spec,
+                                    const FilterData& data, const std::vector<double>& x0) {
+  const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
+  std::vector<double> e;
+  long windows = 0;
+  std::string why;
+  if (!RunErrors(model, spec, data, {.windows = false, .x0 = x0}, 0.0, &e, &windows, &why) ||
+      e.empty())
     return std::vector<double>(m, std::nan(""));
   return Rmse(e, m);
 }
@@ -155,38 +333,22 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   const auto clock_start = std::chrono::steady_clock::now();
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
-  if (estimate.empty()) throw InputError("--estimator output-error needs --estimate-param");
-  for (const FilterData& d : runs) CheckRun(model, d);
+  if (estimate.empty() && options.estimate_x0.empty())
+    throw InputError("--estimator output-error needs --estimate-param or --estimate-x0");
+  if (runs.empty()) throw InputError("output-error needs a --data file");
   OutputErrorResult r;
   ThetaMap map;
   std::vector<double> lower, upper;
-  std::vector<std::string> names;
-  for (const ParamDesc& d : model.params) names.push_back(d.name);
-  for (const EstimatedParam& e : estimate) {
-    const int found = FindEstimatedParam(e.name, names, model.name);
-    for (int i : map.index)
-      if (i == found) throw InputError("--estimate-param: '" + e.name + "' is named twice");
-    if (e.has_prior) throw InputError("--param-prior applies to --estimator ml only");
-    const double v = spec.params[found];
-    const ThetaScale s =
-        ResolveThetaScale(e, model.params[found].constraint, v, options.bound_width);
-    map.index.push_back(found);
-    map.scale.push_back(s);
-    r.names.push_back((s.is_log ? "log " : "") + e.name);
-    r.is_log.push_back(s.is_log);
-    r.param_names.push_back(e.name);
-    r.param_initial.push_back(v);
-    r.theta_initial.push_back(s.theta0);
-    lower.push_back(s.lower);
-    upper.push_back(s.upper);
-  }
-  const int p = int(map.index.size());
+  MapParams(model, spec, estimate, options.bound_width, &map, &r, &lower, &upper);
+  MapStarts(model, spec, runs, options, &map, &r, &lower, &upper);
+  const int p = int(r.theta_initial.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   const SimulationErrors errors(model, spec, map, runs, options.horizon);
   std::vector<double> e0;
   if (!errors.Errors(r.theta_initial.data(), &e0, &r.windows))
     throw InputError("output-error at the initial parameters: " + errors.why());
   r.residuals = long(e0.size());
+  for (double v : e0) r.cost_initial += 0.5 * v * v;
 
   ceres::NumericDiffOptions step;
   step.relative_step_size = options.theta_step;
@@ -210,34 +372,20 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   ceres::Solve(so, &problem, &summary);
   r.theta = theta;
   r.message = summary.message;
-  r.converged = summary.termination_type == ceres::CONVERGENCE;
   r.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
   r.ok = summary.IsSolutionUsable();
   r.fitted_spec = map.At(spec, theta.data());
 
-  // sigma^2 (J^T J)^-1 through the Fisher analysis of H = J^T J / sigma^2.
-  double final_cost = 0.0;
   ceres::CRSMatrix jac;
   std::vector<double> e;
-  problem.Evaluate(ceres::Problem::EvaluateOptions(), &final_cost, &e, nullptr, &jac);
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &r.cost, &e, nullptr, &jac);
+  r.converged = r.ok && summary.termination_type == ceres::CONVERGENCE && r.cost <= r.cost_initial;
+  if (r.ok && !r.converged && summary.termination_type == ceres::CONVERGENCE)
+    r.message = "the final squared error " + FormatNumber(2 * r.cost) + " exceeds the initial " +
+                FormatNumber(2 * r.cost_initial);
   r.rmse = Rmse(e, m);
-  const double dof = double(std::max<long>(1, r.residuals - p));
-  r.residual_sd = std::sqrt(2.0 * final_cost / dof);
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(jac.num_rows, jac.num_cols);
-  for (int row = 0; row < jac.num_rows; ++row)
-    for (int k = jac.rows[row]; k < jac.rows[row + 1]; ++k) J(row, jac.cols[k]) = jac.values[k];
-  const Eigen::MatrixXd H = J.transpose() * J / (r.residual_sd * r.residual_sd);
-  const FisherReport report = AnalyseFisher(H, r.theta, r.names, r.is_log);
-  r.std_errors = report.std_errors;
-  r.identifiability = report.sentences;
-  for (int j = 0; j < p; ++j) {
-    const double v = map.scale[j].Natural(theta[j]);
-    r.param_values.push_back(v);
-    r.param_std_errors.push_back(map.scale[j].is_log ? v * r.std_errors[j] : r.std_errors[j]);
-    const double tol = 1e-6 * std::max(1.0, std::abs(theta[j]));
-    r.at_bound.push_back(std::abs(theta[j] - lower[j]) <= tol ||
-                         std::abs(theta[j] - upper[j]) <= tol);
-  }
+  r.residual_sd = std::sqrt(2.0 * r.cost / double(std::max<long>(1, r.residuals - p)));
+  StandardErrors(jac, map, lower, upper, &r);
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   return r;
 }

@@ -52,8 +52,10 @@ theta=0.0174533*angle_deg; a and b numbers or pi). Truth: columns named like the
 are the truth only when the file says so (d.csv.json, written by 'estlab simulate') or
 --truth theta,omega names them (--no-truth: never); then the errors, RMSE/MAE and NEES
 are computed, and the summary says which columns were used. An empty or NaN measurement cell
-means no update at that time. Models with an input read a 'u' column if present
-(else --input). The prior holds at --t0 (default: the first row's time; a --t0 later than
+means no update at that time. Models with an input read the input's column (named
+as the model's input, or 'u'; --column maps another), held constant from each row to
+the next (zero-order hold); without the column, --input must give a constant. The
+prior holds at --t0 (default: the first row's time; a --t0 later than
 the first row is refused).
 
 Output: with --out, est.csv with t, <state>_est, <state>_var [, cov_<a>_<b>],
@@ -321,8 +323,8 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   const std::string data_path = vm["data"].as<std::string>();
   const TruthChoice truth = ResolveTruth(vm, data_path, model);
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const FilterData data =
-      LoadFilterData(data_path, model, meas, ParseColumnRenames(vm), truth.read);
+  const FilterData data = LoadFilterData(data_path, model, meas, ParseColumnRenames(vm), truth.read,
+                                         ConstantInputGiven(vm));
   CheckPriorTime(spec, data);
   // Open the output first so an unwritable path fails before the work.
   const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";

@@ -66,7 +66,10 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
     for (size_t k = 0; k < m->measurements[i].outputs.size(); ++k)
       out << (k ? "," : "") << m->measurements[i].outputs[k];
   }
-  if (m->has_input) out << "\n    input:        yes (--input or a 'u' column)";
+  if (m->has_input)
+    out << "\n    input:        " << m->input_name << " (data column '" << m->input_name
+        << (m->input_name == "u" ? "'" : "' or 'u'")
+        << ", held between samples; or a constant --input)";
   if (m->discrete_time) out << "\n    time:         discrete (a step map; --integrator discrete)";
   if (!m->invariants.empty()) {
     out << "\n    invariants:   ";

@@ -11,6 +11,7 @@
 #include "src/core/parse.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "src/options/filter_flags.h"
 #include "src/registry/registry.h"
 
 namespace po = boost::program_options;
@@ -29,11 +30,20 @@ constexpr const char* kExamples = R"(Examples:
       --seed 7 --out d.csv --json
   # Stiff Van der Pol with CVODES BDF:
   estlab simulate --model van-der-pol --x0 x=2 --t-end 3000 --dt 1 --out vdp.csv
+  # Replay a recorded input: the times and the input column of pump.csv
+  # (column 'volts' as the model's input u), noisy and noise-free outputs:
+  estlab simulate --model two-tanks.model --data pump.csv --column u=volts \
+      --x0 h1=0.1,h2=0.05 --measure level --meas-noise-var 1e-6 --out sim.csv
 
 Output: CSV with columns t,<states>[,z_<outputs>], one row per output time from
 t = 0, values in %.17g; a sidecar <out>.json records model, parameters,
 integrator, tolerances, x0, noise variances and seed. Process noise, when
 given, is a draw N(0, diag(v)) added to the state after each output step.
+With --data FILE the rows are at FILE's times (x0 at the first) and a model's
+input is FILE's column named as the input, or 'u' (or --column u=NAME), held constant from each row to
+the next (zero-order hold; CVODES restarts where it changes); the output then
+has the input's column after the states and, with --meas-noise-var, the noise-free
+outputs as y_<output> beside the noisy z_<output>.
 On a CVODES failure the rows computed so far go to <out stem>.partial.csv
 and the exit status is 1; bad input exits 2 and writes nothing.
 )";
@@ -46,7 +56,8 @@ std::string PartialPath(const std::string& out) {
 }
 
 std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
-                        const std::string& integrator_name, const std::string& method) {
+                        const std::string& integrator_name, const std::string& method,
+                        const std::string& data_path) {
   JsonWriter j;
   j.BeginObject();
   j.Key("estlab_version").Value(ESTLAB_VERSION).Key("git_commit").Value(ESTLAB_GIT_COMMIT);
@@ -57,7 +68,12 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   j.EndObject();
   j.Key("states").Value(model.states);
   j.Key("x0").Value(spec.x0);
-  j.Key("t_end").Value(spec.t_end).Key("dt").Value(spec.dt);
+  if (spec.times.empty()) {
+    j.Key("t_end").Value(spec.t_end).Key("dt").Value(spec.dt);
+  } else {
+    j.Key("data").Value(data_path).Key("t0").Value(spec.times.front());
+    j.Key("t_end").Value(spec.times.back()).Key("rows").Value(long(spec.times.size()));
+  }
   j.Key("integrator").Value(integrator_name);
   if (spec.transition.integrator == Integrator::kCvodes) {
     j.Key("method").Value(method);
@@ -66,7 +82,10 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   } else {
     j.Key("substeps").Value(spec.transition.substeps);
   }
-  j.Key("input").Value(spec.input);
+  if (spec.inputs.empty())
+    j.Key("input").Value(spec.input);
+  else
+    j.Key("input").Value("recorded, zero-order hold");
   j.Key("process_noise_var").Value(spec.process_noise_var);
   if (!spec.measurement.empty()) {
     j.Key("measurement").Value(spec.measurement);
@@ -80,9 +99,11 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   return j.str() + "\n";
 }
 
-// The `param = NAME=VALUE` lines of a tuned.ini; its filter noise lines are
-// skipped, any other key is an error naming FILE:LINE.
-std::vector<std::pair<std::string, double>> ConfigParams(const std::string& path) {
+// The `param = NAME=VALUE` lines of a tuned.ini (and its `x0 = NAME=VALUE,...`
+// line into *x0); its filter noise lines are skipped, any other key is an
+// error naming FILE:LINE.
+std::vector<std::pair<std::string, double>> ConfigParams(
+    const std::string& path, std::vector<std::pair<std::string, double>>* x0) {
   std::ifstream in(path);
   if (!in) throw InputError("--config: cannot read '" + path + "'");
   std::vector<std::pair<std::string, double>> out;
@@ -97,15 +118,32 @@ std::vector<std::pair<std::string, double>> ConfigParams(const std::string& path
     const std::string key = Trim(text.substr(0, eq)), value = Trim(text.substr(eq + 1));
     if (key == "param") {
       for (const auto& p : ParseAssignments({value}, where + ": param")) out.push_back(p);
+    } else if (key == "x0") {
+      for (const auto& p : ParseAssignments({value}, where + ": x0")) x0->push_back(p);
     } else if (key != "q" && key != "q-diag" && key != "q-white-accel" && key != "r" &&
                key != "r-diag") {
       throw InputError(where +
-                       ": 'estlab simulate --config' reads 'param' lines (and skips a "
+                       ": 'estlab simulate --config' reads 'param' and 'x0' lines (and skips a "
                        "tuned.ini's Q and R), not '" +
                        key + "'");
     }
   }
   return out;
+}
+
+// --data FILE: the output times and (for a model with an input) the input
+// schedule from FILE; --t-end and --dt then do not apply.
+void UseRecordedSchedule(const po::variables_map& vm, const ModelEntry& model,
+                         SimulationSpec* spec) {
+  if (!vm["t-end"].defaulted() || !vm["dt"].defaulted())
+    throw InputError("--data: the times come from the file; --t-end and --dt do not apply");
+  if (!vm["input"].defaulted())
+    throw InputError("--data: the input comes from the file; --input does not apply");
+  const FilterData record =
+      LoadInputRecord(vm["data"].as<std::string>(), model, ParseColumnRenames(vm));
+  spec->times = record.t;
+  spec->inputs = record.u;
+  if (model.has_input) spec->input_column = model.input_name;
 }
 
 }  // namespace
@@ -139,8 +177,14 @@ int RunSimulate(const std::vector<std::string>& args) {
       "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
       "seed", po::value<unsigned long>()->default_value(1), "random seed")(
       "config", po::value<std::string>(),
-      "read 'param = NAME=VALUE' lines from a file (the tuned.ini of 'estlab tune "
+      "read 'param = NAME=VALUE' and 'x0 = NAME=VALUE,...' lines from a file (the tuned.ini of "
+      "'estlab tune "
       "--estimate-param'; its Q/R lines are for 'estlab filter' and skipped); --param wins")(
+      "data", po::value<std::string>(),
+      "replay FILE: rows at its times, the model's input from its column (named as the "
+      "input, or 'u'; zero-order "
+      "hold)")("column", po::value<std::vector<std::string>>()->composing(),
+               "with --data: map a column, ours=[a*]theirs[+-b], e.g. u=volts")(
       "out", po::value<std::string>(), "output CSV path")("json", "print a JSON summary on stdout");
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -151,29 +195,31 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("out")) throw InputError("--out is required");
-  if (vm.count("config"))
-    RefuseOutputOverInput("--out", vm["out"].as<std::string>(), {vm["config"].as<std::string>()});
+  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"config", "data"}));
+  if (vm.count("column") && !vm.count("data")) throw InputError("--column needs --data");
 
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());
   SimulationSpec spec;
+  std::vector<std::pair<std::string, double>> x0;
   std::vector<std::pair<std::string, double>> params =
-      vm.count("config") ? ConfigParams(vm["config"].as<std::string>())
+      vm.count("config") ? ConfigParams(vm["config"].as<std::string>(), &x0)
                          : std::vector<std::pair<std::string, double>>{};
   if (vm.count("param")) {  // the command line wins
     for (const auto& p : ParseAssignments(vm["param"].as<std::vector<std::string>>(), "--param"))
       params.push_back(p);
   }
   spec.params = model.ResolveParams(params);
-  spec.x0 = model.ResolveState(
-      vm.count("x0") ? ParseAssignments(vm["x0"].as<std::vector<std::string>>(), "--x0")
-                     : std::vector<std::pair<std::string, double>>{},
-      "--x0");
+  if (vm.count("x0"))  // the command line wins
+    for (const auto& p : ParseAssignments(vm["x0"].as<std::vector<std::string>>(), "--x0"))
+      x0.push_back(p);
+  spec.x0 = model.ResolveState(x0, "--x0");
   spec.t_end = ParseNumber(vm["t-end"].as<std::string>(), "--t-end");
   spec.dt = ParseNumber(vm["dt"].as<std::string>(), "--dt");
   if (spec.t_end < 0)
     throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
   if (!(spec.dt > 0)) throw InputError("--dt must be > 0, got " + vm["dt"].as<std::string>());
   if (spec.t_end / spec.dt > 1e8) throw InputError("--t-end / --dt exceeds 1e8 output rows");
+  if (vm.count("data")) UseRecordedSchedule(vm, model, &spec);
   // A discrete-time model's own map is its default (and only) integrator.
   spec.transition.integrator = model.discrete_time && vm["integrator"].defaulted()
                                    ? Integrator::kDiscrete
@@ -210,6 +256,7 @@ int RunSimulate(const std::vector<std::string>& args) {
     spec.measurement = vm["measure"].as<std::string>();
     const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
     if (vm.count("meas-noise-var")) {
+      spec.noise_free_outputs = vm.count("data") > 0;
       spec.meas_noise_var = ParseList(vm["meas-noise-var"].as<std::string>(), "--meas-noise-var");
       RequireLength(spec.meas_noise_var, meas.outputs.size(), "--meas-noise-var",
                     "one per output of '" + meas.name + "'");
@@ -241,7 +288,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   WriteCsv(csv.stream(), result.columns, result.rows);
   sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
-                                  method_name);
+                                  method_name,
+                                  vm.count("data") ? vm["data"].as<std::string>() : "");
   csv.Finish();  // both written before either is in place: both or neither
   sidecar.Finish();
   csv.Commit();
@@ -273,8 +321,11 @@ int RunSimulate(const std::vector<std::string>& args) {
               << "integrator       " << IntegratorName(spec.transition.integrator)
               << (spec.transition.integrator == Integrator::kCvodes ? " (" + method_name + ")" : "")
               << "\n"
-              << "output steps     " << result.steps << "  (t = 0 .. " << spec.t_end
-              << ", dt = " << spec.dt << ")\n"
+              << "output steps     " << result.steps
+              << (spec.times.empty() ? "  (t = 0 .. " + FormatNumber(spec.t_end) +
+                                           ", dt = " + FormatNumber(spec.dt) + ")"
+                                     : "  (the times of " + vm["data"].as<std::string>() + ")")
+              << "\n"
               << "rhs evaluations  " << result.stats.rhs_evals << "\n"
               << "internal steps   " << result.stats.internal_steps << "\n"
               << "wall time        " << std::setprecision(3) << result.wall_s << " s\n";

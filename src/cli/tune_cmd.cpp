@@ -514,7 +514,8 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
                                : vm["data"].as<std::vector<std::string>>().front();
   const MeasurementDesc& meas = model.FindMeasurement(tuned.measurement);
   const FilterData data =
-      LoadFilterData(path, model, meas, ParseColumnRenames(vm), ResolveTruth(vm, path, model).read);
+      LoadFilterData(path, model, meas, ParseColumnRenames(vm), ResolveTruth(vm, path, model).read,
+                     ConstantInputGiven(vm));
   const FilterRunOutput run = model.run_filter(tuned, data);
   const PlotRequest plot{.dir = vm["plot"].as<std::string>(),
                          .what = "tuned " + run.summary.filter + " on " +
@@ -528,6 +529,69 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
 std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
   if (!vm.count(opt)) return {};
   return ParseList(vm[opt].as<std::string>(), "--" + opt);
+}
+
+// The output-error branch of `estlab tune`: fit, validate, write --out (only
+// a converged fit, or with --keep-best the best point named as such), report.
+int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& spec,
+                    const TunerOptions& options, const std::vector<FilterData>& datasets,
+                    double horizon, std::optional<OutputFile>* out, const std::string& out_path) {
+  const int n = int(model.states.size());
+  const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
+  OutputErrorOptions oe;
+  oe.horizon = horizon;
+  oe.max_iterations = options.max_iterations;
+  oe.bound_width = options.bound_width;
+  if (vm.count("estimate-x0")) {
+    std::stringstream names(vm["estimate-x0"].as<std::string>());
+    for (std::string name; std::getline(names, name, ',');) {
+      if (Trim(name).empty()) throw InputError("--estimate-x0: an empty state name");
+      oe.estimate_x0.push_back(Trim(name));
+    }
+  }
+  oe.x0_per_file = vm.count("x0-per-file") > 0;
+  const OutputErrorResult fit = FitOutputError(model, spec, options.estimate, datasets, oe);
+  std::vector<Validation> validations;
+  if (fit.ok && vm.count("validate"))
+    validations = ValidateAll(vm, model, spec, fit.fitted_spec, options.burn_in, horizon);
+  const bool write_out = *out && (fit.converged || (fit.ok && vm.count("keep-best")));
+  if (write_out) {
+    std::ostream& o = (*out)->stream();
+    o << "# estlab tune --estimator output-error: model " << model.name << ", " << fit.start
+      << "; Q and R are the initial ones (output-error does not fit noise)\n";
+    if (!fit.converged)
+      o << "# NOT A VERIFIED FIT (--keep-best): the best admissible point found; " << fit.message
+        << "\n";
+    o << IniLine("q", NoiseParam::kFixed, spec.q_white_accel, spec.qc, spec.q, n);
+    o << IniLine("r", NoiseParam::kFixed, false, 0.0, spec.r, m);
+    for (size_t i = 0; i < fit.param_names.size(); ++i)
+      o << "param = " << fit.param_names[i] << "=" << FormatDouble(fit.param_values[i]) << "\n";
+    for (size_t row = 0; row < fit.x0.size(); ++row) {
+      std::string line;
+      for (int i = 0; i < n; ++i)
+        line += (i ? "," : "") + model.states[i] + "=" + FormatDouble(fit.x0[row][i]);
+      o << (row == 0 && fit.x0.size() == 1 ? "" : "# " + datasets[row].path + ": ")
+        << "x0 = " << line << "\n";
+    }
+    (*out)->Commit();
+  }
+  const std::string wrote = write_out ? out_path : "";
+  if (vm.count("json")) {
+    std::cout << OutputErrorJson(model, spec, fit, datasets, horizon, validations, wrote) << "\n";
+  } else {
+    PrintOutputError(model, spec, fit, datasets, horizon, validations, wrote);
+  }
+  if (!fit.converged) {
+    std::cerr << "estlab: error: output-error: " << (fit.ok ? "no-convergence: " : "failed: ")
+              << fit.message
+              << (*out && !write_out ? "; no --out file written (--keep-best writes the best "
+                                       "point found)"
+                                     : "")
+              << "\n";
+    return 1;
+  }
+  if (vm.count("plot") && !PlotTuned(vm, model, fit.fitted_spec, {}, "")) return 1;
+  return 0;
 }
 
 }  // namespace
@@ -570,6 +634,12 @@ int RunTune(const std::vector<std::string>& args) {
       "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
+      "estimate-x0", po::value<std::string>(),
+      "output-error: also estimate these initial states (NAME,NAME...; initial values from "
+      "--x0); the simulation then runs over the whole record from x0")(
+      "x0-per-file",
+      "with --estimate-x0: each --data file its own initial state (the "
+      "parameters shared)")(
       "estimator", po::value<std::string>()->default_value("ml"),
       "ml (prediction-error maximum likelihood) | em (expectation-maximisation, the "
       "smoother as E-step) | als (autocovariance least squares, kf/ekf) | output-error (free "
@@ -621,8 +691,15 @@ int RunTune(const std::vector<std::string>& args) {
   } else if (vm.count("profile-out")) {
     throw InputError("--profile-out needs --profile");
   }
-  const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = true});
-  if (model.tune == nullptr) throw InputError("model '" + model.name + "' has no tuner");
+  // Output error simulates: a model file needs no tuner compiled for it.
+  const bool output_error = vm["estimator"].as<std::string>() == "output-error";
+  if ((vm.count("estimate-x0") || vm.count("x0-per-file")) && !output_error)
+    throw InputError(std::string(vm.count("estimate-x0") ? "--estimate-x0" : "--x0-per-file") +
+                     " applies to --estimator output-error (the prediction-error fit of the "
+                     "initial state is not built yet)");
+  const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = !output_error});
+  if (model.tune == nullptr && !output_error)
+    throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");
   const MeasurementDesc& meas = model.FindMeasurement(vm["measure"].as<std::string>());
   const int n = int(model.states.size()), m = int(meas.outputs.size());
@@ -676,6 +753,7 @@ int RunTune(const std::vector<std::string>& args) {
   if (!(horizon > 0)) throw InputError("--horizon must be > 0 s, got " + FormatNumber(horizon));
   options.estimate =
       ParseEstimatedParams(text("estimate-param"), text("param-bounds"), text("param-prior"));
+
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
 
@@ -685,7 +763,7 @@ int RunTune(const std::vector<std::string>& args) {
     // Output-error starts its free simulations from the recorded states:
     // there the state columns are the method's input, not truth to score.
     const bool states = estimator == "output-error" || ResolveTruth(vm, path, model).read;
-    datasets.push_back(LoadFilterData(path, model, meas, renames, states));
+    datasets.push_back(LoadFilterData(path, model, meas, renames, states, ConstantInputGiven(vm)));
     CheckPriorTime(spec, datasets.back());
   }
   if (vm.count("validate") && model.run_filter == nullptr)
@@ -704,37 +782,7 @@ int RunTune(const std::vector<std::string>& args) {
   }
   if (estimator == "output-error") {
     if (profile_request) throw InputError("--profile applies to --estimator ml");
-    OutputErrorOptions oe;
-    oe.horizon = horizon;
-    oe.max_iterations = options.max_iterations;
-    oe.bound_width = options.bound_width;
-    const OutputErrorResult fit = FitOutputError(model, spec, options.estimate, datasets, oe);
-    std::vector<Validation> validations;
-    if (fit.ok && vm.count("validate"))
-      validations = ValidateAll(vm, model, spec, fit.fitted_spec, options.burn_in, horizon);
-    if (fit.ok && out) {
-      out->stream() << "# estlab tune --estimator output-error: model " << model.name
-                    << ", horizon " << FormatDouble(horizon)
-                    << " s; Q and R are the initial ones (output-error does not fit noise)\n";
-      out->stream() << IniLine("q", NoiseParam::kFixed, spec.q_white_accel, spec.qc, spec.q, n);
-      out->stream() << IniLine("r", NoiseParam::kFixed, false, 0.0, spec.r, m);
-      for (size_t i = 0; i < fit.param_names.size(); ++i)
-        out->stream() << "param = " << fit.param_names[i] << "="
-                      << FormatDouble(fit.param_values[i]) << "\n";
-      out->Commit();
-    }
-    const std::string wrote = fit.ok ? out_path : "";
-    if (vm.count("json")) {
-      std::cout << OutputErrorJson(model, spec, fit, horizon, validations, wrote) << "\n";
-    } else {
-      PrintOutputError(model, spec, fit, horizon, validations, wrote);
-    }
-    if (!fit.ok) {
-      std::cerr << "estlab: error: output-error: " << fit.message << "\n";
-      return 1;
-    }
-    if (vm.count("plot") && !PlotTuned(vm, model, fit.fitted_spec, {}, "")) return 1;
-    return 0;
+    return TuneOutputError(vm, model, spec, options, datasets, horizon, &out, out_path);
   }
   // Progress only on a terminal (stderr; --json keeps stdout clean anyway).
   ProgressLog log;

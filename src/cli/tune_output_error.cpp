@@ -1,20 +1,41 @@
 #include "src/cli/tune_output_error.h"
 
+#include <algorithm>
 #include <iomanip>
 #include <iostream>
 
 #include "src/io/json.h"
 
 namespace estlab::cli {
+namespace {
+
+const char* StatusName(const OutputErrorResult& r) {
+  return r.ok ? (r.converged ? "converged" : "no-convergence") : "failed";
+}
+
+// The estimated components of x0 row `row` (names and values, or SEs).
+std::vector<double> Estimated(const ModelEntry& model, const OutputErrorResult& r,
+                              const std::vector<double>& row) {
+  std::vector<double> out;
+  for (const std::string& name : r.x0_names) {
+    const auto it = std::find(model.states.begin(), model.states.end(), name);
+    out.push_back(row[size_t(it - model.states.begin())]);
+  }
+  return out;
+}
+
+}  // namespace
 
 void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
-                      double horizon, const std::vector<Validation>& validations,
-                      const std::string& out_path) {
+                      const std::vector<FilterData>& runs, double horizon,
+                      const std::vector<Validation>& validations, const std::string& out_path) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   std::cout << std::setprecision(6) << "model         " << model.name << ", measurement "
             << spec.measurement << "\nestimator     output-error least squares, free simulation"
-            << " over " << horizon << " s windows from the recorded states\ndata          "
-            << r.windows << " windows, " << r.residuals << " residuals\nCeres         " << r.message
+            << " over " << r.start;
+  if (r.start.find("windows") != std::string::npos) std::cout << " (" << horizon << " s)";
+  std::cout << "\ndata          " << r.windows << " free simulation(s), " << r.residuals
+            << " residuals\nstatus        " << StatusName(r) << "\noptimiser     " << r.message
             << " (" << r.iterations << " iterations)\n";
   std::cout << "\n  model parameter               initial     estimate         SE\n";
   for (size_t j = 0; j < r.param_names.size(); ++j) {
@@ -22,6 +43,16 @@ void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const Out
               << std::setw(12) << r.param_initial[j] << " " << std::setw(12) << r.param_values[j]
               << " " << std::setw(10) << r.param_std_errors[j]
               << (r.at_bound[j] ? "  at a bound" : "") << "\n";
+  }
+  for (size_t row = 0; row < r.x0.size(); ++row) {
+    std::cout << "\n  initial state" << (r.x0.size() > 1 ? " of " + runs[row].path : "") << "\n";
+    const std::vector<double> v = Estimated(model, r, r.x0[row]);
+    const std::vector<double> se = Estimated(model, r, r.x0_std_errors[row]);
+    const std::vector<double> v0 = Estimated(model, r, spec.x0);
+    for (size_t i = 0; i < v.size(); ++i)
+      std::cout << "  " << std::left << std::setw(26) << r.x0_names[i] << std::right
+                << std::setw(12) << v0[i] << " " << std::setw(12) << v[i] << " " << std::setw(10)
+                << se[i] << "\n";
   }
   for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
   std::cout << "\nresidual sd   " << r.residual_sd << "\nfit RMSE      ";
@@ -33,20 +64,36 @@ void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const Out
 }
 
 std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
-                            const OutputErrorResult& r, double horizon,
-                            const std::vector<Validation>& validations,
+                            const OutputErrorResult& r, const std::vector<FilterData>& runs,
+                            double horizon, const std::vector<Validation>& validations,
                             const std::string& out_path) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   JsonWriter j;
   j.BeginObject().Key("model").Value(model.name).Key("measurement").Value(spec.measurement);
   j.Key("estimator").Value("output-error").Key("horizon").Value(horizon);
-  j.Key("status").Value(r.ok ? (r.converged ? "converged" : "no-convergence") : "failed");
+  j.Key("start").Value(r.start);
+  j.Key("status").Value(StatusName(r));
   j.Key("message").Value(r.message);
-  j.Key("tuned").BeginObject().Key("params").Object(r.param_names, r.param_values).EndObject();
+  j.Key("tuned").BeginObject().Key("params").Object(r.param_names, r.param_values);
+  if (r.x0.size() == 1) j.Key("x0").Object(r.x0_names, Estimated(model, r, r.x0[0]));
+  j.EndObject();
   j.Key("std_errors").Object(r.param_names, r.param_std_errors);
+  if (r.x0.size() == 1)
+    j.Key("x0_std_errors").Object(r.x0_names, Estimated(model, r, r.x0_std_errors[0]));
+  if (r.x0.size() > 1) {
+    j.Key("x0_per_file").BeginArray();
+    for (size_t row = 0; row < r.x0.size(); ++row) {
+      j.BeginObject().Key("data").Value(runs[row].path);
+      j.Key("x0").Object(r.x0_names, Estimated(model, r, r.x0[row]));
+      j.Key("std_errors").Object(r.x0_names, Estimated(model, r, r.x0_std_errors[row]));
+      j.EndObject();
+    }
+    j.EndArray();
+  }
   j.Key("params_initial").Object(r.param_names, r.param_initial);
   j.Key("parameters").Value(r.names).Key("theta").Value(r.theta);
   j.Key("identifiability").Value(r.identifiability);
+  j.Key("cost_initial").Value(r.cost_initial).Key("cost").Value(r.cost);
   j.Key("residual_sd").Value(r.residual_sd).Key("fit_rmse").Object(meas.outputs, r.rmse);
   j.Key("windows").Value(r.windows).Key("residuals").Value(r.residuals);
   j.Key("iterations").Value(r.iterations).Key("wall_s").Value(r.wall_s);

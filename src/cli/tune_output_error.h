@@ -13,13 +13,16 @@
 
 namespace estlab::cli {
 
+// `runs` are the --data files (their paths name the per-file x0).
 void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
-                      double horizon, const std::vector<Validation>& validations,
-                      const std::string& out_path);
+                      const std::vector<FilterData>& runs, double horizon,
+                      const std::vector<Validation>& validations, const std::string& out_path);
 
+// "tuned": {"params": {...}, "x0": {STATE: value, ...}} (the shared x0), and
+// "x0_per_file": [{"data": PATH, "x0": {...}, "std_errors": {...}}, ...].
 std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
-                            const OutputErrorResult& r, double horizon,
-                            const std::vector<Validation>& validations,
+                            const OutputErrorResult& r, const std::vector<FilterData>& runs,
+                            double horizon, const std::vector<Validation>& validations,
                             const std::string& out_path);
 
 }  // namespace estlab::cli

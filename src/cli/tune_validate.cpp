@@ -59,6 +59,15 @@ std::vector<double> SidecarParams(const std::string& text, const ModelEntry& mod
   return out;
 }
 
+// Whether windows of `horizon` s fit `d`: evenly sampled, two rows or more.
+bool WindowsFit(const FilterData& d, double horizon) {
+  if (d.t.size() < 2 || !(horizon > 0)) return false;
+  const double dt = (d.t.back() - d.t.front()) / double(d.t.size() - 1);
+  for (size_t k = 1; k < d.t.size(); ++k)
+    if (std::abs(d.t[k] - d.t[k - 1] - dt) > 1e-6 * dt + 1e-12) return false;
+  return true;
+}
+
 // `data` is scored against its truth when it has one; the free simulation
 // starts from the recorded states of `recorded` (its state columns, truth
 // or not).
@@ -68,9 +77,11 @@ ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const Filte
   const FilterRunOutput out = model.run_filter(spec, data);
   // The burn-in counts updates, as the tuner's; rows without an update are
   // few in recorded data, so skip that many rows.
-  ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}};
-  if (recorded.has_truth && !model.has_input)
+  ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}, {}};
+  if (recorded.has_truth && WindowsFit(recorded, horizon))
     r.free_rmse = FreeSimulationRmse(model, spec, recorded, horizon);
+  if (out.summary.x0.size() == model.states.size())
+    r.whole_rmse = WholeRecordRmse(model, spec, recorded, out.summary.x0);
   return r;
 }
 
@@ -82,7 +93,8 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   // The state columns when the file has them (the free simulation's start
   // points); scored as truth only when the file or --truth says so.
-  const FilterData recorded = LoadFilterData(path, model, meas, ParseColumnRenames(vm), true);
+  const FilterData recorded =
+      LoadFilterData(path, model, meas, ParseColumnRenames(vm), true, ConstantInputGiven(vm));
   FilterData data = recorded;
   if (!ResolveTruth(vm, path, model).read) {
     data.has_truth = false;
@@ -105,7 +117,7 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   // The true noise: --true-q-diag / --true-r-diag, else the simulate sidecar
   // (whose parameters are then the true ones too).
   const int n = int(model.states.size()), m = int(meas.outputs.size());
-  std::vector<double> q_diag, r_diag, params;
+  std::vector<double> q_diag, r_diag, params, x0;
   std::string source;
   std::ifstream sidecar(path + ".json");
   if (sidecar) {
@@ -116,6 +128,7 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
     if (has_q && q_diag.empty()) q_diag.assign(n, 0.0);  // simulated without process noise
     if (has_q || has_r) source = path + ".json";
     params = SidecarParams(text.str(), model);
+    if (!JsonNumberArray(text.str(), "x0", &x0) || x0.size() != size_t(n)) x0.clear();
   }
   if (vm.count("true-q-diag")) {
     q_diag = ParseList(vm["true-q-diag"].as<std::string>(), "--true-q-diag");
@@ -132,6 +145,10 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
     RequireNonNegative(r_diag, "true measurement noise");
     FilterSpec oracle = spec;
     if (!params.empty()) oracle.params = params;
+    if (!x0.empty() && !params.empty()) {  // the simulation's start: the true prior mean
+      oracle.x0 = x0;
+      oracle.x0_first_sample = false;
+    }
     oracle.q_white_accel = false;
     oracle.q.assign(n * n, 0.0);
     for (int i = 0; i < n; ++i) oracle.q[i * n + i] = q_diag[i];
@@ -161,8 +178,10 @@ void PrintValidation(const Validation& v, const std::vector<std::string>& output
   std::cout << "\nvalidation on " << v.path << "\n  prior mean  ";
   for (size_t i = 0; i < v.x0.size() && i < v.states.size(); ++i)
     std::cout << (i ? ", " : "") << v.states[i] << " = " << v.x0[i];
+  std::cout << "  (the whole-file free simulation's start; inputs held between samples)";
   std::cout << "\n  setting    NLL/step    mean NIS (95% bounds)          pred RMSE ("
-            << outputs.size() << ")   free-sim RMSE over " << horizon << " s   mean NEES   RMSE\n";
+            << outputs.size() << ")   free-sim RMSE over " << horizon
+            << " s   free-sim RMSE whole file   mean NEES   RMSE\n";
   auto row = [&](const char* name, const ValidationRun& r) {
     const NoTruthMetrics& m = r.metrics;
     std::cout << "  " << std::left << std::setw(9) << name << std::right << std::setw(10)
@@ -171,7 +190,11 @@ void PrintValidation(const Validation& v, const std::vector<std::string>& output
     for (size_t i = 0; i < m.pred_rmse.size(); ++i) std::cout << (i ? ", " : "") << m.pred_rmse[i];
     std::cout << "  ";
     for (size_t i = 0; i < r.free_rmse.size(); ++i) std::cout << (i ? ", " : "") << r.free_rmse[i];
-    if (r.free_rmse.empty()) std::cout << "-";
+    if (r.free_rmse.empty()) std::cout << "- (no state columns)";
+    std::cout << "  ";
+    for (size_t i = 0; i < r.whole_rmse.size(); ++i)
+      std::cout << (i ? ", " : "") << r.whole_rmse[i];
+    if (r.whole_rmse.empty()) std::cout << "-";
     const FilterSummary& s = r.summary;
     if (!s.rmse.empty()) {
       std::cout << "  " << std::setw(9) << s.mean_nees << "  ";
@@ -197,6 +220,7 @@ void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::stri
   j->Key("nis_bounds95").Value(std::vector<double>{m.nis_bounds95[0], m.nis_bounds95[1]});
   j->Key("pred_rmse").Object(outputs, m.pred_rmse);
   if (!r.free_rmse.empty()) j->Key("free_rmse").Object(outputs, r.free_rmse);
+  if (!r.whole_rmse.empty()) j->Key("whole_rmse").Object(outputs, r.whole_rmse);
   if (!s.rmse.empty()) {
     j->Key("rmse").BeginObject();
     for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);

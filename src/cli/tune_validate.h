@@ -7,6 +7,9 @@
 //   rmse, mean_nees      when the file has truth columns
 //   free_rmse_<output>   the free simulation over `horizon` s windows from
 //                        the recorded states (output_error.h), ditto
+//   whole_rmse_<output>  the free simulation over the whole file from the
+//                        run's prior mean x0 (--x0, or the tuned.ini's x0),
+//                        driven by the file's input (zero-order hold)
 //
 // The true noise comes from --true-q-diag / --true-r-diag, else from the
 // FILE.json that `estlab simulate` writes beside its CSV.
@@ -31,6 +34,9 @@ struct ValidationRun {
   // Free-simulation RMSE per output over windows of `horizon` s from the
   // recorded states (studies/output_error.h); empty without state columns.
   std::vector<double> free_rmse;
+  // Free-simulation RMSE per output over the whole file from the run's prior
+  // mean (summary.x0), the file's input held between samples.
+  std::vector<double> whole_rmse;
 };
 
 struct Validation {

@@ -1,5 +1,6 @@
 // Expressions of the model-file language: the syntax tree, its parser and a
 // double-precision evaluator.
+// User reference of the language (sections, functions, every error): docs/model-language.md
 //
 //   sum      = product { ("+" | "-") product }          left-associative
 //   product  = unary { ("*" | "/") unary }              left-associative

@@ -1,5 +1,6 @@
 // estlab's model-file language: a model written as an INI-shaped text file,
 // parsed and checked here, then turned into a C++ model header by codegen.h.
+// User reference of the language (sections, functions, every error): docs/model-language.md
 //
 //   # compound_pendulum.model
 //   [model]
@@ -33,11 +34,11 @@
 // A discrete-time model has a [step] section instead of [rhs] (x_next per
 // state; 'dt' is the step length there and in [let]). Expressions: see
 // expression.h. Names available
-//   in [let]:                    states, parameters, the input, t, earlier lets (+ dt in [step]
-//   models) in [rhs] / [step]:           the same and every let in measurements, invariants:
-//   states, parameters, numbers and pi only (their
-//                                Eval(x, p) / Invariants(x, p) see no input, time or lets)
-//   in parameter defaults:       numbers, pi and functions (e.g. 0.15 * 0.17^2 / 12)
+//   in [let]:               states, parameters, the input, t, earlier lets (+ dt in [step] models)
+//   in [rhs] / [step]:      the same and every let
+//   in measurements and     states, parameters, numbers and pi only (their Eval(x, p) and
+//   invariants:             Invariants(x, p) see no input, time or lets)
+//   in parameter defaults:  numbers, pi and functions (e.g. 0.15 * 0.17^2 / 12)
 // Sections may come in any order. Several [invariant GROUP] sections may be
 // given; the model's invariants hold when every name listed in any group's
 // conserved-if-zero is 0.

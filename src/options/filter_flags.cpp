@@ -223,15 +223,62 @@ std::string Where(const std::string& path, long line, const Source& s) {
 
 }  // namespace
 
+namespace {
+
+// The time and input columns of every row of `table` into *data (t, lines,
+// has_input, u). A model with an input needs its column unless
+// constant_input says the run holds one value; a missing or non-finite input
+// and time going backwards are errors naming FILE:LINE and the column.
+void ReadTimesAndInputs(const CsvTable& table, const std::string& path, const ModelEntry& model,
+                        const std::vector<ColumnMap>& columns, bool constant_input,
+                        FilterData* data) {
+  const Source tc = FindSource(table, columns, "t");
+  if (tc.column < 0) throw InputError(path + ": no '" + tc.name + "' (time) column");
+  Source uc;
+  if (model.has_input) {
+    uc = FindSource(table, columns, model.input_name);
+    const bool u_is_a_state =
+        std::find(model.states.begin(), model.states.end(), "u") != model.states.end();
+    if (uc.column < 0 && model.input_name != "u" && !u_is_a_state)
+      uc = FindSource(table, columns, "u");
+    if (uc.column < 0) uc.name = model.input_name;
+  }
+  if (model.has_input && uc.column < 0 && !constant_input)
+    throw InputError(path + ": no input column '" + uc.name + "' for the input of model '" +
+                     model.name + "' (map another column with --column " + model.input_name +
+                     "=NAME, or "
+                     "hold the input constant with --input)");
+  data->has_input = uc.column >= 0;
+  for (size_t k = 0; k < table.rows.size(); ++k) {
+    const auto& row = table.rows[k];
+    const long line = table.line_numbers[k];
+    const double t = tc.Read(row);
+    if (!std::isfinite(t)) throw InputError(Where(path, line, tc) + "missing time");
+    if (!data->t.empty() && t < data->t.back())
+      throw InputError(Where(path, line, tc) + "time goes backwards (" + FormatNumber(t) +
+                       " after " + FormatNumber(data->t.back()) + ")");
+    data->t.push_back(t);
+    data->lines.push_back(line);
+    if (data->has_input) {
+      const double u = uc.Read(row);
+      if (std::isnan(row[uc.column])) throw InputError(Where(path, line, uc) + "missing input");
+      if (!std::isfinite(u))
+        throw InputError(Where(path, line, uc) + "input is not finite (" + FormatNumber(u) + ")");
+      data->u.push_back(u);
+    }
+  }
+  if (data->t.empty()) throw InputError(path + ": no data rows");
+}
+
+}  // namespace
+
 FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
                           const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
-                          bool read_truth) {
+                          bool read_truth, bool constant_input) {
   const CsvTable table = ReadCsv(path);
   auto source = [&](const std::string& ours) { return FindSource(table, columns, ours); };
   FilterData data;
   data.path = path;
-  const Source tc = source("t");
-  if (tc.column < 0) throw InputError(path + ": no '" + tc.name + "' (time) column");
   std::vector<Source> zc;
   for (const auto& o : meas.outputs) {
     zc.push_back(source("z_" + o));
@@ -246,29 +293,27 @@ FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
   int present = 0;
   for (const Source& s : sc) present += s.column >= 0;
   data.has_truth = read_truth && present == int(sc.size());
-  const Source uc = model.has_input ? source("u") : Source{};
-  data.has_input = uc.column >= 0;
+  ReadTimesAndInputs(table, path, model, columns, constant_input, &data);
   data.m = int(meas.outputs.size());
   const int n = int(model.states.size());
-  for (size_t k = 0; k < table.rows.size(); ++k) {
-    const auto& row = table.rows[k];
-    const long line = table.line_numbers[k];
-    const double t = tc.Read(row);
-    if (!std::isfinite(t)) throw InputError(Where(path, line, tc) + "missing time");
-    if (!data.t.empty() && t < data.t.back())
-      throw InputError(Where(path, line, tc) + "time goes backwards (" + FormatNumber(t) +
-                       " after " + FormatNumber(data.t.back()) + ")");
-    data.t.push_back(t);
-    data.lines.push_back(line);
+  for (const auto& row : table.rows) {
     for (const Source& z : zc) data.z.push_back(z.Read(row));
     if (data.has_truth)
       for (int i = 0; i < n; ++i) data.truth.push_back(sc[i].Read(row));
-    if (data.has_input) {
-      if (!std::isfinite(row[uc.column])) throw InputError(Where(path, line, uc) + "missing input");
-      data.u.push_back(uc.Read(row));
-    }
   }
-  if (data.t.empty()) throw InputError(path + ": no data rows");
+  return data;
+}
+
+bool ConstantInputGiven(const po::variables_map& vm) {
+  return vm.count("input") && !vm["input"].defaulted();
+}
+
+FilterData LoadInputRecord(const std::string& path, const ModelEntry& model,
+                           const std::vector<ColumnMap>& columns) {
+  const CsvTable table = ReadCsv(path);
+  FilterData data;
+  data.path = path;
+  ReadTimesAndInputs(table, path, model, columns, false, &data);
   return data;
 }
 

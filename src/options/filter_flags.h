@@ -48,12 +48,24 @@ FilterSpec BuildFilterSpec(const boost::program_options::variables_map& vm, cons
 // Reads a data CSV for `model` and measurement `meas`: column t, the
 // z_<output> columns, truth columns named like the states (optional, all or
 // none), and 'u' for models with an input. `columns` maps any of them from
-// another column, ours = a * theirs + b (column_map.h); missing values stay
-// missing. With read_truth false the state-named columns are not read (data
-// whose state-like columns are derived, not measured truth).
+// another column, ours = a * theirs + b (column_map.h); missing measurements
+// stay missing. With read_truth false the state-named columns are not read
+// (data whose state-like columns are derived, not measured truth). A model
+// with an input needs the 'u' column unless constant_input (the user gave
+// --input); a missing or non-finite input is an error naming FILE:LINE.
 FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
                           const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
-                          bool read_truth = true);
+                          bool read_truth = true, bool constant_input = false);
+
+// Whether the command line (or a --config file) holds the input at one
+// value (--input): data without a 'u' column are then allowed.
+bool ConstantInputGiven(const boost::program_options::variables_map& vm);
+
+// The times and (for a model with an input) the input column of a CSV, as
+// `estlab simulate --data` replays them: t, lines, has_input and u of the
+// result are set, m = 0. Errors as LoadFilterData's.
+FilterData LoadInputRecord(const std::string& path, const ModelEntry& model,
+                           const std::vector<ColumnMap>& columns);
 
 // Throws InputError when spec's --t0 is later than the first row of `data`
 // (the filter cannot run back to it; it used to be ignored silently). The

@@ -55,7 +55,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"resample", "systematic", "pf: multinomial | systematic | stratified | residual"},
       {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
       {"seed", "1", "random seed (pf: the particles; tune: the multi-start points)", K::kValue, false, true},
-      {"input", "0", "constant input when the data has no 'u' column", K::kValue, false, true},
+      {"input", "0", "constant input, for data without the input's column (else that column, held between samples)", K::kValue, false, true},
       {"column", nullptr, "map a column: ours=[a*]theirs[+-b] (ours = a theirs + b; a, b numbers or pi), e.g. z_theta=angle_rad, theta=angle-pi, theta=0.0174533*angle_deg", K::kRepeatable, false, true},
       {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
   };

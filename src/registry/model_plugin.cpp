@@ -222,7 +222,10 @@ std::string ResolveModelPath(const std::string& name) {
 
 void SetModelCacheDir(const std::string& dir) { CacheOverride() = dir; }
 
-std::string ModelCacheDir() {
+namespace {
+
+// The cache folder as given (option, environment, XDG, HOME), maybe relative.
+std::string GivenCacheDir() {
   if (!CacheOverride().empty()) return CacheOverride();
   if (const char* d = std::getenv("ESTLAB_MODEL_CACHE"); d != nullptr && *d) return d;
   if (const char* d = std::getenv("XDG_CACHE_HOME"); d != nullptr && *d)
@@ -231,6 +234,13 @@ std::string ModelCacheDir() {
     return (fs::path(h) / ".cache" / "estlab").string();
   throw InputError("no model cache folder: set ESTLAB_MODEL_CACHE or give --model-cache");
 }
+
+}  // namespace
+
+// Absolute: the compiler runs in the cache folder, where a relative path
+// (--model-cache cache) would name cache/cache/... (it used to fail with
+// "fatal error: cache/<name>-<key>/model.h: No such file or directory").
+std::string ModelCacheDir() { return fs::absolute(GivenCacheDir()).lexically_normal().string(); }
 
 const ModelEntry& LoadModelFile(const std::string& path, ModelNeeds needs) {
   static std::mutex mutex;
@@ -299,6 +309,7 @@ ModelEntry DescribeModelFile(const std::string& path) {
   }
   for (const modelfile::InvariantDecl& inv : m.invariants) e.invariants.push_back(inv.name);
   e.has_input = m.input.has_value();
+  if (m.input) e.input_name = *m.input;
   e.stiff = m.stiff;
   e.discrete_time = m.discrete;
   return e;

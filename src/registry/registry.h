@@ -51,6 +51,9 @@ struct ModelEntry {
   std::vector<MeasurementDesc> measurements;
   std::vector<std::string> invariants;
   bool has_input = false;
+  // The input's data column: the model file's input name (built-in models:
+  // "u"); data may also name it "u".
+  std::string input_name = "u";
   bool stiff = false;
   bool discrete_time = false;  // a step map x(t + dt) (Integrator::kDiscrete only)
 

@@ -19,7 +19,20 @@ struct SimulationSpec {
   double t_end = 10.0;
   double dt = 0.01;
   TransitionOptions transition;
-  double input = 0.0;
+  double input = 0.0;  // constant input, when `inputs` is empty
+  // A recorded schedule (`estlab simulate --data`, output error, free
+  // simulation): when not empty, rows are written at these times (the first
+  // is x0's time) instead of k dt, and t_end and dt are not used. `inputs`
+  // (empty, or one per time) is held over [times[k], times[k+1]) (zero-order
+  // hold: a model's input is piecewise constant between samples, and CVODES
+  // restarts at every sample where it changes).
+  std::vector<double> times;
+  std::vector<double> inputs;
+  // When not empty, a column of this name after the states (the input held
+  // from each row on).
+  std::string input_column;
+  // Adds the noise-free outputs y_<output> after the z_ columns.
+  bool noise_free_outputs = false;
   std::vector<double> process_noise_var;  // empty = none, else one per state
   // Full process-noise covariance per output step (n x n, row-major, PSD);
   // used instead of process_noise_var when not empty.
@@ -30,7 +43,7 @@ struct SimulationSpec {
 };
 
 struct SimulationResult {
-  std::vector<std::string> columns;       // t, states, z_<outputs>
+  std::vector<std::string> columns;       // t, states[, u], z_<outputs>[, y_<outputs>]
   std::vector<std::vector<double>> rows;  // one per output time computed
   bool ok = true;
   std::string error;  // CVODES' reason when !ok

@@ -1,5 +1,6 @@
 // Truth simulation: integrate a model from x0 over [0, t_end] with output
-// every dt, optionally adding process noise to the state after each output
+// every dt (or over a recorded schedule of times and held inputs),
+// optionally adding process noise to the state after each output
 // step and measurement noise to the chosen measurement.
 //
 //   x_{k+1} = Phi(x_k; t_k, t_{k+1}) + w_k,  w_k ~ N(0, diag(process_noise_var))
@@ -24,22 +25,61 @@
 
 namespace estlab {
 
+// The output times: spec.times when given, else t_k = k dt up to t_end (the
+// last one clipped to t_end).
+inline std::vector<double> OutputTimes(const SimulationSpec& spec) {
+  if (!spec.times.empty()) return spec.times;
+  const long steps = std::max(0L, long(std::ceil(spec.t_end / spec.dt - 1e-9)));
+  std::vector<double> times(size_t(steps) + 1);
+  for (long k = 0; k <= steps; ++k) times[k] = std::min(spec.t_end, k * spec.dt);
+  return times;
+}
+
+// The input held over [times[k], times[k+1]).
+inline double InputAt(const SimulationSpec& spec, size_t k) {
+  return spec.inputs.empty() ? spec.input : spec.inputs[std::min(k, spec.inputs.size() - 1)];
+}
+
+// Process noise w = L n with L L^T = Q (diagonal variances or a full PSD
+// covariance; the symmetric square root handles semi-definite Q); false
+// when the spec has none.
+template <int N>
+bool ProcessNoiseFactor(const SimulationSpec& spec, Mat<N, N>* factor) {
+  factor->setZero();
+  if (!spec.process_noise_cov.empty()) {
+    Mat<N, N> Q;
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < N; ++j) Q(i, j) = spec.process_noise_cov[i * N + j];
+    Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(0.5 * (Q + Q.transpose()));
+    *factor = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+              eig.eigenvectors().transpose();
+    return true;
+  }
+  if (spec.process_noise_var.empty()) return false;
+  for (int i = 0; i < N; ++i) (*factor)(i, i) = std::sqrt(spec.process_noise_var[i]);
+  return true;
+}
+
 template <class Model>
 SimulationResult Simulate(const SimulationSpec& spec) {
   constexpr int N = Model::kStateDim;
   using State = Vec<double, N>;
   const auto start = std::chrono::steady_clock::now();
   const typename Model::Params params = ParamsFromVector<Model>(spec.params);
+  const std::vector<double> times = OutputTimes(spec);
 
   SimulationResult result;
   result.columns.push_back("t");
   for (const char* s : Model::kStateNames) result.columns.push_back(s);
+  if (!spec.input_column.empty()) result.columns.push_back(spec.input_column);
 
-  // Type-erased measurement with noise.
+  // Type-erased measurement.
   std::vector<double> (*measure)(const State&, const typename Model::Params&) = nullptr;
   VisitMeasurement<Model>(spec.measurement, [&](auto m) {
     using Meas = decltype(m);
     for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("z_") + o);
+    if (spec.noise_free_outputs)
+      for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("y_") + o);
     measure = [](const State& x, const typename Model::Params& p) {
       const Vec<double, Meas::kDim> z = Meas::template Eval<double>(x, p);
       return std::vector<double>(z.data(), z.data() + Meas::kDim);
@@ -47,37 +87,26 @@ SimulationResult Simulate(const SimulationSpec& spec) {
   });
 
   Rng rng(spec.seed);
-  auto make_row = [&](double t, const State& x) {
+  auto make_row = [&](size_t k, const State& x) {
     std::vector<double> row;
-    row.push_back(t);
+    row.push_back(times[k]);
     for (int i = 0; i < N; ++i) row.push_back(x(i));
+    if (!spec.input_column.empty()) row.push_back(InputAt(spec, k));
     if (measure != nullptr) {
-      std::vector<double> z = measure(x, params);
-      for (size_t j = 0; j < z.size(); ++j) {
-        if (!spec.meas_noise_var.empty()) z[j] += std::sqrt(spec.meas_noise_var[j]) * rng.Normal();
-        row.push_back(z[j]);
+      const std::vector<double> y = measure(x, params);
+      for (size_t j = 0; j < y.size(); ++j) {
+        double z = y[j];
+        if (!spec.meas_noise_var.empty()) z += std::sqrt(spec.meas_noise_var[j]) * rng.Normal();
+        row.push_back(z);
       }
+      if (spec.noise_free_outputs) row.insert(row.end(), y.begin(), y.end());
     }
     return row;
   };
 
-  // Process noise w = L n with L L^T = Q (diagonal variances or a full PSD
-  // covariance; the symmetric square root handles semi-definite Q).
-  Mat<N, N> noise_factor = Mat<N, N>::Zero();
-  bool has_process_noise = false;
-  if (!spec.process_noise_cov.empty()) {
-    Mat<N, N> Q;
-    for (int i = 0; i < N; ++i)
-      for (int j = 0; j < N; ++j) Q(i, j) = spec.process_noise_cov[i * N + j];
-    Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(0.5 * (Q + Q.transpose()));
-    noise_factor = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
-                   eig.eigenvectors().transpose();
-    has_process_noise = true;
-  } else if (!spec.process_noise_var.empty()) {
-    for (int i = 0; i < N; ++i) noise_factor(i, i) = std::sqrt(spec.process_noise_var[i]);
-    has_process_noise = true;
-  }
-  const bool track_invariants = Model::kInvariantNames.size() > 0 &&
+  Mat<N, N> noise_factor;
+  const bool has_process_noise = ProcessNoiseFactor<N>(spec, &noise_factor);
+  const bool track_invariants = Model::kInvariantNames.size() > 0 && spec.inputs.empty() &&
                                 Model::InvariantsHold(params, spec.input) && !has_process_noise;
   auto transition = MakeTransition<Model>(params, spec.transition);
   transition->SetInput(spec.input);
@@ -86,15 +115,13 @@ SimulationResult Simulate(const SimulationSpec& spec) {
   const auto inv0 = Model::Invariants(x, params);
   std::vector<double> drift(Model::kInvariantNames.size(), 0.0);
 
-  // Output times t_k = k dt, the last one clipped to t_end.
-  const long steps = std::max(0L, long(std::ceil(spec.t_end / spec.dt - 1e-9)));
-  result.rows.reserve(steps + 1);
-  result.rows.push_back(make_row(0.0, x));
-  for (long k = 0; k < steps; ++k) {
-    const double t0 = k * spec.dt;
-    const double t1 = std::min(spec.t_end, (k + 1) * spec.dt);
+  result.rows.reserve(times.size());
+  result.rows.push_back(make_row(0, x));
+  for (size_t k = 0; k + 1 < times.size(); ++k) {
+    const double t0 = times[k], t1 = times[k + 1];
     try {
-      x = transition->Step(x, t0, t1);
+      transition->SetInput(InputAt(spec, k));
+      if (t1 > t0) x = transition->Step(x, t0, t1);
     } catch (const NumericalError& e) {
       result.ok = false;
       result.error = e.what();
@@ -105,7 +132,7 @@ SimulationResult Simulate(const SimulationSpec& spec) {
       result.error = "state became non-finite at t = " + std::to_string(t1);
       break;
     }
-    if (has_process_noise) {
+    if (has_process_noise && t1 > t0) {
       Vec<double, N> n;
       for (int i = 0; i < N; ++i) n(i) = rng.Normal();
       x += noise_factor * n;
@@ -117,7 +144,7 @@ SimulationResult Simulate(const SimulationSpec& spec) {
         drift[j] = std::max(drift[j], std::abs(inv(j) - inv0(j)) / scale);
       }
     }
-    result.rows.push_back(make_row(t1, x));
+    result.rows.push_back(make_row(k + 1, x));
     ++result.steps;
   }
   if (track_invariants) {

@@ -96,6 +96,35 @@ TEST(OutputError, RecoversLengthAndDampingWithinThreeStandardErrors) {
               r.residual_sd, r.iterations, r.wall_s);
 }
 
+// Without state columns and with the initial state estimated, the whole
+// record is simulated from x0 (uneven sampling allowed): L, b and theta(0),
+// omega(0) come back within 3 standard errors, and the whole-record RMSE at
+// the fit is the noise level.
+TEST(OutputError, WholeRecordFitRecoversParametersAndInitialState) {
+  const ModelEntry& model = FindModel("pendulum");
+  FilterData d = Pendulum(kSigma, 5.0);
+  d.has_truth = false;
+  d.truth.clear();
+  FilterSpec spec = Spec(0.6, 0.2);
+  spec.x0 = {1.0, 0.3};
+  OutputErrorOptions options;
+  options.estimate_x0 = {"theta", "omega"};
+  const OutputErrorResult r =
+      FitOutputError(model, spec, {{.name = "L"}, {.name = "b"}}, {d}, options);
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_EQ(r.start, "the whole record from the estimated x0");
+  EXPECT_EQ(r.names, (std::vector<std::string>{"log L", "b", "x0 theta", "x0 omega"}));
+  EXPECT_LT(std::abs(r.param_values[0] - kL), 3.0 * r.param_std_errors[0]);
+  EXPECT_LT(std::abs(r.param_values[1] - kB), 3.0 * r.param_std_errors[1]);
+  ASSERT_EQ(r.x0.size(), 1u);
+  EXPECT_LT(std::abs(r.x0[0][0] - 1.2), 3.0 * r.x0_std_errors[0][0]) << r.x0[0][0];
+  EXPECT_LT(std::abs(r.x0[0][1] - 0.0), 3.0 * r.x0_std_errors[0][1]) << r.x0[0][1];
+  EXPECT_LE(r.cost, r.cost_initial);
+  EXPECT_NEAR(WholeRecordRmse(model, r.fitted_spec, d, r.x0[0])[0], kSigma, 0.1 * kSigma);
+  std::printf("  L %.6f +- %.2g, theta0 %.6f +- %.2g, %d iterations\n", r.param_values[0],
+              r.param_std_errors[0], r.x0[0][0], r.x0_std_errors[0][0], r.iterations);
+}
+
 TEST(OutputError, RejectsDataItCannotUse) {
   const ModelEntry& model = FindModel("pendulum");
   const std::vector<EstimatedParam> estimate = {{.name = "L"}};
@@ -103,11 +132,24 @@ TEST(OutputError, RejectsDataItCannotUse) {
   uneven.t[7] += 0.004;
   std::string e =
       testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {uneven}, {}); });
-  EXPECT_NE(e.find("sim.csv:9: output-error needs evenly sampled data"), std::string::npos) << e;
+  EXPECT_NE(e.find("sim.csv:9: output-error windows need evenly sampled data"), std::string::npos)
+      << e;
+  // Without state columns the windows have no start: FreeSimulationRmse says
+  // so; the fit simulates the whole record from x0 instead (next test).
   FilterData no_states = Pendulum(0.0, 1.0);
   no_states.has_truth = false;
-  e = testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {no_states}, {}); });
+  e = testing::ErrorText([&] { FreeSimulationRmse(model, Spec(0.8, 0.1), no_states, 0.5); });
   EXPECT_NE(e.find("need a column per state"), std::string::npos) << e;
+  OutputErrorOptions x0;
+  x0.estimate_x0 = {"phi"};
+  e = testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {no_states}, x0); });
+  EXPECT_NE(e.find("--estimate-x0: 'phi' is not a state of model 'pendulum' (theta, omega)"),
+            std::string::npos)
+      << e;
+  x0.estimate_x0 = {"theta"};
+  x0.x0_per_file = true;
+  e = testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {no_states}, x0); });
+  EXPECT_NE(e.find("--x0-per-file needs two --data files"), std::string::npos) << e;
   e = testing::ErrorText(
       [&] { FitOutputError(model, Spec(0.8, 0.1), {{.name = "len"}}, {Pendulum(0.0, 1.0)}, {}); });
   EXPECT_NE(e.find("has no parameter 'len'"), std::string::npos) << e;
@@ -121,8 +163,7 @@ TEST(OutputError, RejectsDataItCannotUse) {
             std::string::npos)
       << e;
   e = testing::ErrorText([&] {
-    FitOutputError(model, Spec(0.8, 0.1), {{.name = "L"}, {.name = "L"}}, {Pendulum(0.0, 1.0)},
-                   {});
+    FitOutputError(model, Spec(0.8, 0.1), {{.name = "L"}, {.name = "L"}}, {Pendulum(0.0, 1.0)}, {});
   });
   EXPECT_NE(e.find("'L' is named twice"), std::string::npos) << e;
   OutputErrorOptions bad;

@@ -1,0 +1,245 @@
+// The two-tank example (examples/two_tanks/): its README walkthrough as
+// written, output error with the initial state estimated on 50 simulated
+// data sets (coverage of the truth by 2 standard errors, the squared error
+// at the estimate at most that at the truth), three experiments with their
+// own initial states (--x0-per-file), and a relative --model-cache on a
+// first compile. Label "plugin": the model file compiles (about a minute).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli/cli_test_util.h"
+
+namespace estlab::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kDir = std::string(ESTLAB_SOURCE_DIR) + "/examples/two_tanks";
+const std::string kModel = kDir + "/two_tanks.model";
+
+void WriteFile(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+std::string Cache() {
+  return (fs::path(ESTLAB_BINARY).parent_path() / "test-model-cache").string();
+}
+RunResult Est(const std::string& args, const std::string& cwd) {
+  return RunEstlab("--model-cache '" + Cache() + "' " + args, cwd);
+}
+
+// The number after "key": inside the object that follows "section": (the
+// first "key" when section is empty); NaN when absent.
+double JsonNumber(const std::string& json, const std::string& section, const std::string& key) {
+  size_t at = section.empty() ? 0 : json.find("\"" + section + "\": ");
+  if (at == std::string::npos) return std::nan("");
+  at = json.find("\"" + key + "\": ", at);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+// The README's walkthrough block: its `build/estlab` commands (continuations
+// joined, $D the example folder).
+std::vector<std::string> Walkthrough() {
+  const std::string readme = ReadFile(kDir + "/README.md");
+  const size_t section = readme.find("## Walkthrough");
+  if (section == std::string::npos) return {};
+  const size_t begin = readme.find("```sh\n", section) + 6;
+  const std::string block = readme.substr(begin, readme.find("```", begin) - begin);
+  std::vector<std::string> commands;
+  std::string joined;
+  for (const std::string& line : SplitLines(block)) {
+    if (line.empty() || line[0] == '#' || line.rfind("D=", 0) == 0) continue;
+    joined += line;
+    if (joined.back() == '\\') {
+      joined.pop_back();
+      continue;
+    }
+    for (size_t at; (at = joined.find("$D")) != std::string::npos;) joined.replace(at, 2, kDir);
+    if (joined.rfind("build/estlab ", 0) == 0) commands.push_back(joined.substr(13));
+    joined.clear();
+  }
+  return commands;
+}
+
+const char* kTrue[] = {"k", "a1", "a2"};
+const double kTrueValue[] = {0.004, 0.03, 0.025};
+
+TEST(TwoTanks, ReadmeWalkthroughFitsAndValidatesNearTheNoiseFreeFloor) {
+  const std::vector<std::string> commands = Walkthrough();
+  ASSERT_EQ(commands.size(), 4u);
+  TempDir dir;
+  for (size_t i = 0; i < commands.size(); ++i) {
+    const bool tune = commands[i].rfind("tune ", 0) == 0;
+    const RunResult r = Est(commands[i] + (tune ? " --json" : ""), dir.path());
+    ASSERT_EQ(r.exit_code, 0) << commands[i] << "\n" << r.err << r.out;
+    if (!tune) continue;
+    EXPECT_NE(r.out.find("\"status\": \"converged\""), std::string::npos) << r.out;
+    for (int j = 0; j < 3; ++j) {
+      const double v = JsonNumber(r.out, "tuned", kTrue[j]);
+      const double se = JsonNumber(r.out, "std_errors", kTrue[j]);
+      EXPECT_LT(std::abs(v - kTrueValue[j]), 3 * se) << kTrue[j] << " " << v << " +- " << se;
+      std::printf("  %s = %.6g +- %.2g (true %g)\n", kTrue[j], v, se, kTrueValue[j]);
+    }
+    const double h1 = JsonNumber(r.out, "x0", "h1"), h2 = JsonNumber(r.out, "x0", "h2");
+    EXPECT_NEAR(h1, 0.07, 3 * JsonNumber(r.out, "x0_std_errors", "h1"));
+    EXPECT_NEAR(h2, 0.10, 3 * JsonNumber(r.out, "x0_std_errors", "h2"));
+    // The validation: the tuned model's whole-file free simulation against
+    // the true model's (the noise-free floor of these data).
+    const size_t validation = r.out.find("\"validation\"");
+    ASSERT_NE(validation, std::string::npos);
+    const std::string v = r.out.substr(validation);
+    const double tuned = JsonNumber(v.substr(v.find("\"tuned\"")), "whole_rmse", "h2");
+    const double floor = JsonNumber(v.substr(v.find("\"oracle\"")), "whole_rmse", "h2");
+    EXPECT_LE(tuned, 1.2 * floor) << tuned << " vs floor " << floor;
+    EXPECT_GT(floor, 0.0);
+    std::printf("  validation free-simulation RMSE %.4g m, noise-free floor %.4g m (x%.3f)\n",
+                tuned, floor, tuned / floor);
+  }
+  const std::string fitted = ReadFile(dir.path() + "/fitted_valid.csv");
+  EXPECT_EQ(fitted.rfind("t,h1,h2,u,z_h2\n", 0), 0u) << fitted.substr(0, 80);
+}
+
+// Simulates one record of `input` from x0 with `seed` into `out`.
+void Simulate(const std::string& cwd, const std::string& input, const std::string& x0, int seed,
+              const std::string& out) {
+  const RunResult r =
+      Est("simulate --model " + kModel + " --data " + kDir + "/" + input + " --x0 " + x0 +
+              " --integrator rk4 --substeps 4 --process-noise-var 1e-9,1e-9 "
+              "--measure level --meas-noise-var 1e-6 --seed " +
+              std::to_string(seed) + " --out " + out,
+          cwd);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+std::string Fit(const std::string& data, const std::string& start, const std::string& extra) {
+  return "tune --model " + kModel + " " + data +
+         " --measure level --estimator output-error --estimate-param k,a1,a2 " + start +
+         " --estimate-x0 h1,h2 --integrator rk4 --substeps 4 --init-q-diag 1e-9,1e-9 "
+         "--init-r-diag 1e-6 --json " +
+         extra;
+}
+
+TEST(TwoTanks, OutputErrorWithX0CoversTheTruthInFiftyDataSets) {
+  TempDir dir;
+  int covered[5] = {0, 0, 0, 0, 0}, sets = 0;
+  const char* x0_names[] = {"h1", "h2"};
+  const double x0_true[] = {0.07, 0.10};
+  for (int seed = 1; seed <= 50; ++seed) {
+    Simulate(dir.path(), "pump_train.csv", "h1=0.07,h2=0.10", seed, "d.csv");
+    const RunResult fit = Est(Fit("--data d.csv",
+                                  "--param k=0.003,a1=0.02,a2=0.02 "
+                                  "--x0 h1=0.1,h2=0.1",
+                                  ""),
+                              dir.path());
+    ASSERT_EQ(fit.exit_code, 0) << fit.err << fit.out;
+    // The squared error at the truth: the first evaluation of a fit started there.
+    const RunResult at_truth = Est(Fit("--data d.csv",
+                                       "--param k=0.004,a1=0.03,a2=0.025 "
+                                       "--x0 h1=0.07,h2=0.10",
+                                       "--max-iterations 1"),
+                                   dir.path());
+    const double cost = JsonNumber(fit.out, "", "cost");
+    const double cost_truth = JsonNumber(at_truth.out, "", "cost_initial");
+    EXPECT_LE(cost, cost_truth * (1 + 1e-9)) << "seed " << seed;
+    for (int j = 0; j < 3; ++j) {
+      const double v = JsonNumber(fit.out, "tuned", kTrue[j]);
+      covered[j] += std::abs(v - kTrueValue[j]) <= 2 * JsonNumber(fit.out, "std_errors", kTrue[j]);
+    }
+    for (int j = 0; j < 2; ++j) {
+      const double v = JsonNumber(fit.out, "x0", x0_names[j]);
+      covered[3 + j] +=
+          std::abs(v - x0_true[j]) <= 2 * JsonNumber(fit.out, "x0_std_errors", x0_names[j]);
+    }
+    ++sets;
+  }
+  const char* names[] = {"k", "a1", "a2", "h1(0)", "h2(0)"};
+  for (int j = 0; j < 5; ++j) {
+    std::printf("  %s within 2 SE in %d of %d data sets\n", names[j], covered[j], sets);
+    EXPECT_GE(covered[j], 45) << names[j];
+  }
+}
+
+TEST(TwoTanks, ThreeExperimentsRecoverTheirOwnInitialStates) {
+  TempDir dir;
+  const double x0[3][2] = {{0.07, 0.10}, {0.02, 0.03}, {0.15, 0.05}};
+  int covered = 0, total = 0;
+  for (int rep = 0; rep < 10; ++rep) {
+    std::string data;
+    for (int f = 0; f < 3; ++f) {
+      const std::string name = "e" + std::to_string(f) + ".csv";
+      Simulate(dir.path(), f == 1 ? "pump_valid.csv" : "pump_train.csv",
+               "h1=" + std::to_string(x0[f][0]) + ",h2=" + std::to_string(x0[f][1]),
+               100 * rep + f + 1, name);
+      data += " --data " + name;
+    }
+    const RunResult fit =
+        Est(Fit(data, "--param k=0.003,a1=0.02,a2=0.02 --x0 h1=0.1,h2=0.1", "--x0-per-file"),
+            dir.path());
+    ASSERT_EQ(fit.exit_code, 0) << fit.err << fit.out;
+    size_t at = fit.out.find("\"x0_per_file\"");
+    ASSERT_NE(at, std::string::npos) << fit.out;
+    for (int f = 0; f < 3; ++f) {
+      at = fit.out.find("\"data\": ", at + 1);
+      const std::string item = fit.out.substr(at);
+      for (int j = 0; j < 2; ++j) {
+        const char* s = j ? "h2" : "h1";
+        const double v = JsonNumber(item, "x0", s), se = JsonNumber(item, "std_errors", s);
+        covered += std::abs(v - x0[f][j]) <= 2 * se;
+        ++total;
+      }
+    }
+  }
+  std::printf("  per-file x0 within 2 SE: %d of %d\n", covered, total);
+  EXPECT_GE(covered, int(std::ceil(0.9 * total)));
+}
+
+TEST(TwoTanks, BadInputNamesTheValueAndWritesNothing) {
+  TempDir dir;
+  WriteFile(dir.path() + "/no_u.csv", "t,volts\n0,1\n2,1\n");
+  WriteFile(dir.path() + "/nan_u.csv", "t,u\n0,1\n2,nan\n");
+  WriteFile(dir.path() + "/inf_u.csv", "t,u\n0,1\n2,inf\n");
+  WriteFile(dir.path() + "/back.csv", "t,u\n0,1\n2,1\n1,1\n");
+  const std::string sim = "simulate --model " + kModel + " --measure level --out o.csv --data ";
+  const std::string tune = "tune --model " + kModel +
+                           " --data d.csv --measure level --init-q-diag 1e-9,1e-9 "
+                           "--init-r-diag 1e-6 --out tuned.ini ";
+  struct Case {
+    std::string args, mentions;
+  } cases[] = {
+      {sim + "no_u.csv", "no_u.csv: no input column 'u'"},
+      {sim + "nan_u.csv", "nan_u.csv:3: column 2 ('u'): missing input"},
+      {sim + "inf_u.csv", "inf_u.csv:3: column 2 ('u'): 'inf' is not a finite number"},
+      {sim + "back.csv", "back.csv:4: column 1 ('t'): time goes backwards"},
+      {tune + "--estimator output-error --estimate-x0 h3", "--estimate-x0: 'h3' is not a state"},
+      {tune + "--estimator output-error --estimate-x0 h1 --x0-per-file",
+       "--x0-per-file needs two --data files"},
+      {tune + "--estimate-x0 h1", "--estimate-x0 applies to --estimator output-error"},
+  };
+  Simulate(dir.path(), "pump_train.csv", "h1=0.07,h2=0.10", 1, "d.csv");
+  for (const Case& c : cases) {
+    const RunResult r = Est(c.args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: error: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.mentions), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(dir.path() + "/o.csv"));
+    EXPECT_FALSE(fs::exists(dir.path() + "/tuned.ini"));
+  }
+}
+
+TEST(TwoTanks, RelativeModelCacheWorksOnAFirstCompile) {
+  TempDir dir;
+  const RunResult r = RunEstlab("--model-cache relative-cache simulate --model " + kModel +
+                                    " --data " + kDir + "/pump_train.csv --x0 h1=0.07 --out s.csv",
+                                dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_directory(dir.path() + "/relative-cache"));
+  EXPECT_EQ(ReadFile(dir.path() + "/s.csv").rfind("t,h1,h2,u\n", 0), 0u);
+}
+
+}  // namespace
+}  // namespace estlab::testing
