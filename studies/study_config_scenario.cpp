@@ -93,7 +93,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
                     "[" + sc.section + "] truth-integrator"},
               err, [&](const std::string& t) {
                 const Integrator i = ParseIntegrator(t);
-                const std::string e = CheckIntegratorForModel(i, model.discrete_time, model.name);
+                const std::string e = model.CheckIntegrator(i);
                 if (!e.empty()) throw InputError(e);
                 return i;
               });

@@ -224,9 +224,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   spec.transition.integrator = model.discrete_time && vm["integrator"].defaulted()
                                    ? Integrator::kDiscrete
                                    : ParseIntegrator(vm["integrator"].as<std::string>());
-  if (const std::string e =
-          CheckIntegratorForModel(spec.transition.integrator, model.discrete_time, model.name);
-      !e.empty())
+  if (const std::string e = model.CheckIntegrator(spec.transition.integrator); !e.empty())
     throw InputError("--integrator: " + e);
   const std::string method = vm["method"].as<std::string>();
   if (method == "bdf")

@@ -151,7 +151,7 @@ void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions*
   t->integrator = model.discrete_time && !r.Given("integrator")
                       ? Integrator::kDiscrete
                       : ForKey("integrator", [&] { return ParseIntegrator(r.Text("integrator")); });
-  const std::string error = CheckIntegratorForModel(t->integrator, model.discrete_time, model.name);
+  const std::string error = model.CheckIntegrator(t->integrator);
   if (!error.empty()) throw KeyError("integrator", error);
   t->substeps = r.Count("substeps", 0, 100000);
   const std::string method = r.Text("method");

@@ -111,6 +111,23 @@ std::vector<double> ModelEntry::ResolveState(
   return x;
 }
 
+std::string ModelEntry::CheckIntegrator(Integrator integrator) const {
+  const std::string error = CheckIntegratorForModel(integrator, discrete_time, name);
+  if (!error.empty() || integrator != Integrator::kSemiImplicitEuler) return error;
+  std::vector<std::string> unpaired;
+  for (size_t i = 0; i < states.size(); ++i) {
+    bool paired = false;
+    for (const auto& [pos, rate] : position_rate_pairs)
+      paired = paired || pos == int(i) || rate == int(i);
+    if (!paired) unpaired.push_back(states[i]);
+  }
+  if (unpaired.empty()) return "";
+  return "integrator 'semi-implicit-euler' advances only the states in a (position, rate) pair; "
+         "model '" +
+         name + "' has " + Join(unpaired) +
+         " in none (they would stay frozen): use rk4, euler or cvodes";
+}
+
 const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) const {
   std::vector<std::string> names;
   for (const auto& m : measurements) {

@@ -71,6 +71,11 @@ struct ModelEntry {
   std::vector<double> ResolveState(const std::vector<std::pair<std::string, double>>& values,
                                    const std::string& option) const;
   const MeasurementDesc& FindMeasurement(const std::string& name) const;
+  // "" when `integrator` can run this model, else why not: discrete-time
+  // models and integrators (CheckIntegratorForModel), and semi-implicit
+  // Euler for a model with a state in no (position, rate) pair (it would
+  // leave that state frozen).
+  std::string CheckIntegrator(Integrator integrator) const;
   int StateIndex(const std::string& name) const;  // -1 when unknown
 };
 

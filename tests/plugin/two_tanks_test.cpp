@@ -215,6 +215,8 @@ TEST(TwoTanks, BadInputNamesTheValueAndWritesNothing) {
       {sim + "nan_u.csv", "nan_u.csv:3: column 2 ('u'): missing input"},
       {sim + "inf_u.csv", "inf_u.csv:3: column 2 ('u'): 'inf' is not a finite number"},
       {sim + "back.csv", "back.csv:4: column 1 ('t'): time goes backwards"},
+      {sim + "d.csv --integrator semi-implicit-euler",
+       "advances only the states in a (position, rate) pair; model 'two-tanks' has h1, h2 in none"},
       {tune + "--estimator output-error --estimate-x0 h3", "--estimate-x0: 'h3' is not a state"},
       {tune + "--estimator output-error --estimate-x0 h1 --x0-per-file",
        "--x0-per-file needs two --data files"},
