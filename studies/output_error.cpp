@@ -14,12 +14,18 @@
 namespace estlab {
 namespace {
 
+double MeanStep(const FilterData& d) { return (d.t.back() - d.t.front()) / double(d.t.size() - 1); }
+
+bool Uneven(const FilterData& d, size_t k, double dt) {
+  return std::abs(d.t[k] - d.t[k - 1] - dt) > 1e-6 * dt + 1e-12;
+}
+
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
   if (d.t.size() < 2) throw InputError(d.path + ": output-error needs at least two rows");
-  const double dt = (d.t.back() - d.t.front()) / double(d.t.size() - 1);
+  const double dt = MeanStep(d);
   for (size_t k = 1; k < d.t.size(); ++k) {
-    if (std::abs(d.t[k] - d.t[k - 1] - dt) > 1e-6 * dt + 1e-12)
+    if (Uneven(d, k, dt))
       throw InputError(d.path + ":" + std::to_string(d.lines[k]) +
                        ": output-error windows need evenly sampled data (step " + FormatNumber(dt) +
                        ", here " + FormatNumber(d.t[k] - d.t[k - 1]) +
@@ -284,6 +290,14 @@ void StandardErrors(const ceres::CRSMatrix& jac, const ThetaMap& map,
 }
 
 }  // namespace
+
+bool EvenlySampled(const FilterData& d) {
+  if (d.t.size() < 2) return false;
+  const double dt = MeanStep(d);
+  for (size_t k = 1; k < d.t.size(); ++k)
+    if (Uneven(d, k, dt)) return false;
+  return true;
+}
 
 bool OutputErrorOptions::IsValid(std::string* error) const {
   auto fail = [&](const std::string& what) {

@@ -86,6 +86,10 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
                                  const std::vector<FilterData>& runs,
                                  const OutputErrorOptions& options);
 
+// Whether `d` has two rows or more, evenly sampled (every step within
+// 1e-6 of the mean step): what windows of a horizon need.
+bool EvenlySampled(const FilterData& d);
+
 // RMSE per output of the free simulation of `spec` over windows of
 // `horizon` seconds from the recorded states; NaN when a simulation fails.
 // Throws InputError when `data` lacks state columns or is unevenly sampled.

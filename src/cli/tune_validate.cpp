@@ -59,15 +59,6 @@ std::vector<double> SidecarParams(const std::string& text, const ModelEntry& mod
   return out;
 }
 
-// Whether windows of `horizon` s fit `d`: evenly sampled, two rows or more.
-bool WindowsFit(const FilterData& d, double horizon) {
-  if (d.t.size() < 2 || !(horizon > 0)) return false;
-  const double dt = (d.t.back() - d.t.front()) / double(d.t.size() - 1);
-  for (size_t k = 1; k < d.t.size(); ++k)
-    if (std::abs(d.t[k] - d.t[k - 1] - dt) > 1e-6 * dt + 1e-12) return false;
-  return true;
-}
-
 // `data` is scored against its truth when it has one; the free simulation
 // starts from the recorded states of `recorded` (its state columns, truth
 // or not).
@@ -78,7 +69,7 @@ ValidationRun RunOn(const ModelEntry& model, const FilterSpec& spec, const Filte
   // The burn-in counts updates, as the tuner's; rows without an update are
   // few in recorded data, so skip that many rows.
   ValidationRun r{out.summary, ComputeNoTruthMetrics(out, outputs, burn_in), {}, {}};
-  if (recorded.has_truth && WindowsFit(recorded, horizon))
+  if (recorded.has_truth && EvenlySampled(recorded))
     r.free_rmse = FreeSimulationRmse(model, spec, recorded, horizon);
   if (out.summary.x0.size() == model.states.size())
     r.whole_rmse = WholeRecordRmse(model, spec, recorded, out.summary.x0);
@@ -190,7 +181,7 @@ void PrintValidation(const Validation& v, const std::vector<std::string>& output
     for (size_t i = 0; i < m.pred_rmse.size(); ++i) std::cout << (i ? ", " : "") << m.pred_rmse[i];
     std::cout << "  ";
     for (size_t i = 0; i < r.free_rmse.size(); ++i) std::cout << (i ? ", " : "") << r.free_rmse[i];
-    if (r.free_rmse.empty()) std::cout << "- (no state columns)";
+    if (r.free_rmse.empty()) std::cout << "- (needs state columns, evenly sampled)";
     std::cout << "  ";
     for (size_t i = 0; i < r.whole_rmse.size(); ++i)
       std::cout << (i ? ", " : "") << r.whole_rmse[i];

@@ -78,6 +78,35 @@ inline std::vector<std::string> SplitLines(const std::string& text) {
   return lines;
 }
 
+// The `build/estlab` commands of the first ```sh block after `heading` in the
+// markdown file `path` (relative to the source tree), as written: lines
+// joined at a trailing backslash, comments skipped, `$D` replaced by the
+// block's `D=FOLDER` (relative to the source tree), "build/estlab " cut off.
+// Empty when the heading is missing.
+inline std::vector<std::string> MarkdownCommands(const std::string& path,
+                                                 const std::string& heading) {
+  const std::string text = ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/" + path);
+  const size_t section = text.find(heading);
+  if (section == std::string::npos) return {};
+  const size_t begin = text.find("```sh\n", section) + 6;
+  const std::string block = text.substr(begin, text.find("```", begin) - begin);
+  std::string d, joined;
+  std::vector<std::string> commands;
+  for (const std::string& line : SplitLines(block)) {
+    if (line.rfind("D=", 0) == 0) d = std::string(ESTLAB_SOURCE_DIR) + "/" + line.substr(2);
+    if (line.empty() || line[0] == '#' || line.rfind("D=", 0) == 0) continue;
+    joined += line;
+    if (joined.back() == '\\') {
+      joined.pop_back();
+      continue;
+    }
+    for (size_t at; (at = joined.find("$D")) != std::string::npos;) joined.replace(at, 2, d);
+    if (joined.rfind("build/estlab ", 0) == 0) commands.push_back(joined.substr(13));
+    joined.clear();
+  }
+  return commands;
+}
+
 // A noisy pendulum run (measurement `sin`) into d.csv, and filter options
 // that fit it (append --data and --out).
 inline constexpr const char* kPendulumSimulate =

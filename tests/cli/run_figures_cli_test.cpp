@@ -292,31 +292,10 @@ TEST(ConventionsCli, ListAndReadmeSayTheAngleConventions) {
   EXPECT_NE(readme.find("`full` → theta, omega"), std::string::npos);
 }
 
-// The README's "Your own data, step by step" block as written: its
-// `build/estlab` lines (continuations joined, $D pointed at the source
-// tree's examples/), run in a temporary folder.
+// The README's "Your own data, step by step" block as written, run in a
+// temporary folder.
 std::vector<std::string> ReadmeWalkthrough() {
-  const std::string readme = ReadFile(std::string(ESTLAB_SOURCE_DIR) + "/README.md");
-  const size_t section = readme.find("## Your own data, step by step");
-  if (section == std::string::npos) return {};
-  const size_t begin = readme.find("```sh\n", section) + 6;
-  const std::string block = readme.substr(begin, readme.find("```", begin) - begin);
-  std::string d;
-  std::vector<std::string> commands;
-  std::string joined;
-  for (const std::string& line : SplitLines(block)) {
-    if (line.rfind("D=", 0) == 0) d = std::string(ESTLAB_SOURCE_DIR) + "/" + line.substr(2);
-    if (line.empty() || line[0] == '#' || line.rfind("D=", 0) == 0) continue;
-    joined += line;
-    if (!joined.empty() && joined.back() == '\\') {
-      joined.pop_back();
-      continue;
-    }
-    for (size_t at; (at = joined.find("$D")) != std::string::npos;) joined.replace(at, 2, d);
-    if (joined.rfind("build/estlab ", 0) == 0) commands.push_back(joined.substr(13));
-    joined.clear();
-  }
-  return commands;
+  return MarkdownCommands("README.md", "## Your own data, step by step");
 }
 
 // Issue 14's done-when: the walkthrough on one training piece. The guess's

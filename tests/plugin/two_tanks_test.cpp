@@ -42,35 +42,12 @@ double JsonNumber(const std::string& json, const std::string& section, const std
   return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
 }
 
-// The README's walkthrough block: its `build/estlab` commands (continuations
-// joined, $D the example folder).
-std::vector<std::string> Walkthrough() {
-  const std::string readme = ReadFile(kDir + "/README.md");
-  const size_t section = readme.find("## Walkthrough");
-  if (section == std::string::npos) return {};
-  const size_t begin = readme.find("```sh\n", section) + 6;
-  const std::string block = readme.substr(begin, readme.find("```", begin) - begin);
-  std::vector<std::string> commands;
-  std::string joined;
-  for (const std::string& line : SplitLines(block)) {
-    if (line.empty() || line[0] == '#' || line.rfind("D=", 0) == 0) continue;
-    joined += line;
-    if (joined.back() == '\\') {
-      joined.pop_back();
-      continue;
-    }
-    for (size_t at; (at = joined.find("$D")) != std::string::npos;) joined.replace(at, 2, kDir);
-    if (joined.rfind("build/estlab ", 0) == 0) commands.push_back(joined.substr(13));
-    joined.clear();
-  }
-  return commands;
-}
-
 const char* kTrue[] = {"k", "a1", "a2"};
 const double kTrueValue[] = {0.004, 0.03, 0.025};
 
 TEST(TwoTanks, ReadmeWalkthroughFitsAndValidatesNearTheNoiseFreeFloor) {
-  const std::vector<std::string> commands = Walkthrough();
+  const std::vector<std::string> commands =
+      MarkdownCommands("examples/two_tanks/README.md", "## Walkthrough");
   ASSERT_EQ(commands.size(), 4u);
   TempDir dir;
   for (size_t i = 0; i < commands.size(); ++i) {
