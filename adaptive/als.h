@@ -1,5 +1,5 @@
 // Autocovariance least squares for Q and R (`estlab tune --estimator als`,
-// TunerForm::kAls): Odelson, Rajamani & Rawlings, "A new autocovariance
+// Estimator::kAls): Odelson, Rajamani & Rawlings, "A new autocovariance
 // least-squares method for estimating noise covariances", Automatica 42
 // (2006), in its time-varying form, so that the KF's transient and the EKF
 // linearised along its own estimates are covered too. Include only through
@@ -54,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/tune_problem.h"
 #include "adaptive/tune_verdict.h"
 #include "adaptive/tuner_drivers.h"
 #include "adaptive/tuner_result.h"
@@ -399,20 +400,18 @@ AlsSystem BuildAlsSystem(const InnovationLikelihood<Model, Meas>& lik, const Fil
 }
 
 template <class Model, class Meas>
-void RunAls(const Objective<Model, Meas>& objective, const FilterSpec& spec,
-            const TunerOptions& options, const std::vector<FilterData>& datasets,
-            const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+void RunAls(const Objective<Model, Meas>& objective, const TuneProblem& tune, TuneResult* out) {
+  const FilterSpec& spec = tune.spec;
+  const TunerOptions& options = tune.options;
+  const std::vector<FilterData>& datasets = tune.datasets;
+  const std::vector<double>&lower = tune.lower, &upper = tune.upper;
   using namespace als_internal;
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
   TuneResult& result = *out;
-  const bool ekf = std::holds_alternative<EkfOptions>(spec.filter);
-  if (!(spec.kind() == FilterKind::kKf || (ekf && !spec.iterated())))
-    throw InputError(
-        "--estimator als supports the kf and the ekf (linearised along its own "
-        "estimates), not " +
-        std::string(FilterKindName(spec.kind())));
+  // The filters it accepts (kf, ekf): its row of adaptive/estimators.h, checked by
+  // IsTunable when the likelihood was built.
   const CovarianceParam<N>& qp = lik.q_param();
   const CovarianceParam<M>& rp = lik.r_param();
   const int lags = options.als_lags;

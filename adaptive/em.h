@@ -1,5 +1,5 @@
 // Expectation-maximisation for Q and R (`estlab tune --estimator em`,
-// TunerForm::kEm), with the filter's own smoother as the E-step
+// Estimator::kEm), with the filter's own smoother as the E-step
 // (Shumway & Stoffer 1982; Saerkkae & Svensson, Bayesian Filtering and
 // Smoothing, 2nd ed., 2023, ch. 16). Include only through
 // adaptive/tuner_impl.h.
@@ -55,6 +55,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/tune_problem.h"
 #include "adaptive/tune_verdict.h"
 #include "adaptive/tuner_drivers.h"
 #include "adaptive/tuner_result.h"
@@ -337,16 +338,17 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
 }
 
 template <class Model, class Meas>
-void RunEm(const Objective<Model, Meas>& objective, const FilterSpec& spec,
-           const TunerOptions& options, const std::vector<FilterData>& datasets,
-           const std::vector<double>& lower, const std::vector<double>& upper, TuneResult* out) {
+void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, TuneResult* out) {
+  const FilterSpec& spec = problem.spec;
+  const TunerOptions& options = problem.options;
+  const std::vector<double>&lower = problem.lower, &upper = problem.upper;
   const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
   TuneResult& result = *out;
   TuneStart start;
   start.theta_start = result.theta_initial;
   start.nll_start = result.nll_initial;
   std::string why;
-  const bool converged = EmIterations(lik, spec, options, datasets, &result, &start, &why);
+  const bool converged = EmIterations(lik, spec, options, problem.datasets, &result, &start, &why);
   const std::vector<double> best = start.theta_end;
   const double best_nll = start.nll_end;
   result.trace = result.nll_history;

@@ -32,29 +32,6 @@ const char* NoiseParamName(NoiseParam param) {
   return "?";
 }
 
-TunerForm ParseTunerForm(const std::string& name) {
-  if (name == "lbfgs") return TunerForm::kLbfgs;
-  if (name == "least-squares") return TunerForm::kLeastSquares;
-  if (name == "em") return TunerForm::kEm;
-  if (name == "als") return TunerForm::kAls;
-  throw InputError("--form: unknown form '" + name +
-                   "' (expected lbfgs, least-squares, em or als)");
-}
-
-const char* TunerFormName(TunerForm form) {
-  switch (form) {
-    case TunerForm::kLbfgs:
-      return "lbfgs";
-    case TunerForm::kLeastSquares:
-      return "least-squares";
-    case TunerForm::kEm:
-      return "em";
-    case TunerForm::kAls:
-      return "als";
-  }
-  return "?";
-}
-
 const char* TuneStatusName(TuneStatus status) {
   switch (status) {
     case TuneStatus::kConverged:
@@ -95,22 +72,20 @@ bool TunerOptions::IsValid(std::string* error) const {
   if (!(log_det_margin > 0)) return fail("log-det margin must be > 0");
   if (r_param == NoiseParam::kWhiteAccel)
     return fail("white-accel applies to the process noise Q only, not to R");
-  if (form == TunerForm::kEm) {
-    if (!(em_tolerance >= 0 && std::isfinite(em_tolerance)))
-      return fail("EM tolerance must be finite and >= 0, got " + FormatNumber(em_tolerance));
-    if (burn_in != 0)
-      return fail(
-          "EM maximises the likelihood of every update: burn-in applies to the ml estimator");
-    if (starts != 1) return fail("EM runs from the initial guess only (starts 1)");
-    if (!estimate.empty())
-      return fail("EM estimates Q and R only; physical parameters need the ml estimator");
-  }
-  if (form == TunerForm::kAls) {
-    if (als_lags < 1) return fail("ALS lags must be >= 1, got " + std::to_string(als_lags));
-    if (starts != 1) return fail("ALS runs from the initial guess only (starts 1)");
-    if (!estimate.empty())
-      return fail("ALS estimates Q and R only; physical parameters need the ml estimator");
-  }
+  const EstimatorInfo& e = InfoOf(estimator);
+  const std::string name = e.name;
+  if (estimator == Estimator::kEm && !(em_tolerance >= 0 && std::isfinite(em_tolerance)))
+    return fail("EM tolerance must be finite and >= 0, got " + FormatNumber(em_tolerance));
+  if (estimator == Estimator::kAls && als_lags < 1)
+    return fail("ALS lags must be >= 1, got " + std::to_string(als_lags));
+  if (!e.burn_in && burn_in != 0)
+    return fail("the " + name +
+                " estimator uses every update: burn-in applies to the ml and als estimators");
+  if (!e.multi_start && starts != 1)
+    return fail("the " + name + " estimator runs from the initial guess only (starts 1)");
+  if (!e.params && !estimate.empty())
+    return fail("the " + name +
+                " estimator estimates Q and R only; physical parameters need the ml estimator");
   for (double v : log_lower)
     if (std::isnan(v)) return fail("a lower bound is NaN");
   for (double v : log_upper)
@@ -129,13 +104,15 @@ bool IsTunable(const FilterSpec& spec, const TunerOptions& options, int state_di
     return false;
   };
   if (!options.IsValid(error)) return false;
-  if (!InfoOf(spec.kind()).tunable) {
-    std::string kinds;
-    for (const FilterKindInfo& info : FilterKinds())
-      if (info.tunable) kinds += std::string(kinds.empty() ? "" : ", ") + info.name;
-    return fail("the tuner supports the " + kinds + " filters, not " + FilterKindName(spec.kind()) +
-                " (its likelihood is a random, non-smooth function of Q and R)");
-  }
+  const EstimatorInfo& e = InfoOf(options.estimator);
+  if (!e.tuner)
+    return fail(std::string("the ") + e.name + " estimator does not run through the tuner");
+  if (!e.accepts(spec))
+    return fail(std::string("the ") + e.name + " estimator supports " + e.filters + ", not " +
+                FilterKindName(spec.kind()) +
+                (InfoOf(spec.kind()).tunable
+                     ? (spec.iterated() ? " with iterations" : "")
+                     : " (its likelihood is a random, non-smooth function of Q and R)"));
   // The filter's own check of its options (the one estlab filter applies).
   if (!IsValidFilterOptions(spec, state_dim, error)) return false;
   if (!spec.adapt.rule.empty())

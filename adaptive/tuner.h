@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "adaptive/estimators.h"
 #include "src/run/filter_spec.h"
 
 namespace estlab {
@@ -56,15 +57,6 @@ enum class NoiseParam { kDiag, kFull, kWhiteAccel, kScalar, kFixed };
 // Parses diag | full | white-accel | scalar | fixed; throws InputError.
 NoiseParam ParseNoiseParam(const std::string& name, const std::string& option);
 const char* NoiseParamName(NoiseParam param);
-
-enum class TunerForm {
-  kLbfgs,         // ceres::GradientProblemSolver, L-BFGS on the NLL
-  kLeastSquares,  // ceres::Solver, Levenberg-Marquardt on whitened residuals
-  kEm,            // expectation-maximisation, the smoother as E-step (adaptive/em.h)
-  kAls,           // autocovariance least squares (adaptive/als.h)
-};
-TunerForm ParseTunerForm(const std::string& name);
-const char* TunerFormName(TunerForm form);
 
 // A physical parameter of the model estimated together with Q and R
 // (`estlab tune --estimate-param`, prediction-error maximum likelihood). A
@@ -94,7 +86,9 @@ struct TuneProgress {
 struct TunerOptions {
   NoiseParam q_param = NoiseParam::kDiag;
   NoiseParam r_param = NoiseParam::kDiag;
-  TunerForm form = TunerForm::kLbfgs;
+  // The estimator (adaptive/estimators.h) and, for ml, its solver.
+  Estimator estimator = Estimator::kMl;
+  MlSolver solver = MlSolver::kLbfgs;
 
   // Updates skipped at the start of every dataset (the prior's transient).
   int burn_in = 0;
@@ -151,7 +145,7 @@ struct TunerOptions {
   // spec's params). Empty: Q and R only.
   std::vector<EstimatedParam> estimate;
 
-  // EM (form kEm): stop when |NLL_i - NLL_{i-1}| <= em_tolerance * |NLL_i|
+  // EM (Estimator::kEm): stop when |NLL_i - NLL_{i-1}| <= em_tolerance * |NLL_i|
   // (max_iterations EM iterations at most); then, with em_compare_ml, run
   // the L-BFGS form from EM's solution so that the report gives both
   // optima (they agree on a linear model; the gap shows the E-step's
@@ -163,7 +157,7 @@ struct TunerOptions {
   // terminal). May be empty.
   std::function<void(const TuneProgress&)> progress;
 
-  // ALS (form kAls): the lags 0 .. als_lags - 1 of the innovation
+  // ALS (Estimator::kAls): the lags 0 .. als_lags - 1 of the innovation
   // autocovariances fitted; burn_in updates of the suboptimal filter are
   // left out of them.
   int als_lags = 10;
@@ -214,7 +208,8 @@ struct TuneStart {
 struct TuneResult {
   TuneStatus status = TuneStatus::kAllStartsFailed;
   std::string message;
-  std::string form;  // "lbfgs" | "least-squares": what was used
+  std::string estimator;  // "ml" | "em" | "als": what was used
+  std::string solver;     // ml: "lbfgs" | "least-squares"; else ""
 
   // The log parameters: names ("log q_theta", "log qc", "log r_sin_theta",
   // "L_q(omega,theta)", ...), values at the initial guess and the optimum,
@@ -267,7 +262,7 @@ struct TuneResult {
   std::vector<TuneStart> starts;
   int best_start = -1;
 
-  // EM (form kEm): the exact NLL at the initial guess and after every
+  // EM (Estimator::kEm): the exact NLL at the initial guess and after every
   // iteration, the wall time of each iteration, how many iterations raised
   // the NLL (0 on a linear model, where EM is monotone), and the NLL that
   // the L-BFGS form reaches from EM's solution (NaN when not run).

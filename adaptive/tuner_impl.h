@@ -5,8 +5,9 @@
 //   tuner_starts.h       bounds, start points, scale search, parallel starts
 //   tuner_information.h  the Hessian, standard errors, identifiability
 //   tuner_result.h       the tuned spec and flags once the optimum is known
-//   em.h, als.h          the EM and ALS estimators on the same pieces
 //   tune_verdict.h       whether the result may be called converged
+//   ml.h, em.h, als.h    the estimators (adaptive/estimators.h), one each,
+//                        on a TuneProblem (tune_problem.h)
 // This file is the entry: TuneWith and TuneModel. Include only from the per-model
 // instantiation units adaptive/tune_<model>.cpp and from tests; everything
 // else reaches it through ModelEntry::tune (adaptive/tuner.h).
@@ -48,10 +49,10 @@
 #include "adaptive/als.h"
 #include "adaptive/em.h"
 #include "adaptive/likelihood.h"
-#include "adaptive/tune_verdict.h"
+#include "adaptive/ml.h"
+#include "adaptive/tune_problem.h"
 #include "adaptive/tuner.h"
 #include "adaptive/tuner_objective.h"
-#include "adaptive/tuner_result.h"
 #include "adaptive/tuner_starts.h"
 
 namespace estlab {
@@ -66,7 +67,7 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   const int k = lik.NumParams();
 
   TuneResult result;
-  result.form = TunerFormName(options.form);
+  result.estimator = EstimatorName(options.estimator);
   result.names = lik.ParamNames();
   result.is_log = lik.ParamIsLog();
   result.theta_initial = lik.InitialTheta();
@@ -76,37 +77,37 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   result.updates = lik.NumTerms();
   const int noise = lik.NumNoiseParams();
   for (int i = 0; i < k; ++i) result.is_physical.push_back(i >= noise);
-  std::vector<double> lower, upper;
-  LikelihoodBounds(lik, options, &lower, &upper);
-  std::vector<std::pair<double, double>> spread;
-  std::vector<bool> lower_is_constraint;
-  ParameterFacts(lik, options, lower, upper, &spread, &lower_is_constraint);
+  TuneProblem problem{.spec = spec,
+                      .options = options,
+                      .datasets = datasets,
+                      .lower = {},
+                      .upper = {},
+                      .spread = {},
+                      .lower_is_constraint = {}};
+  LikelihoodBounds(lik, options, &problem.lower, &problem.upper);
+  ParameterFacts(lik, options, problem.lower, problem.upper, &problem.spread,
+                 &problem.lower_is_constraint);
   if (!lik.Nll(result.theta_initial.data(), &result.nll_initial) ||
       !std::isfinite(result.nll_initial))
     result.nll_initial = kInf;
-  auto finish = [&]() {
-    result.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
-    return result;
-  };
-  if (options.form == TunerForm::kEm || options.form == TunerForm::kAls) {
-    if (options.form == TunerForm::kEm) {
-      RunEm(objective, spec, options, datasets, lower, upper, &result);
-    } else {
-      RunAls(objective, spec, options, datasets, lower, upper, &result);
-    }
-    return finish();
+  switch (options.estimator) {  // exhaustive: adaptive/estimators.h
+    case Estimator::kMl:
+      RunMl(objective, problem, &result);
+      break;
+    case Estimator::kEm:
+      RunEm(objective, problem, &result);
+      break;
+    case Estimator::kAls:
+      RunAls(objective, problem, &result);
+      break;
+    case Estimator::kOutputError:
+      throw InputError(
+          "the output-error estimator simulates (studies/output_error.h): it does not run "
+          "through the tuner");
   }
-  if (k == 0) {
-    NothingToTune(&result);
-  } else {
-    const auto points = StartPoints(options, result.theta_initial, spread, lower, upper);
-    RunStarts(objective, spec, options, datasets, points, lower, upper, &result.starts);
-  }
-  if (!PickBest(&result)) return finish();
-  const Eigen::MatrixXd H = FinishTune(objective, spec, options, lower, upper, &result);
-  ApplyVerdict(H, lower_is_constraint, lower, upper, NllFunction(objective), &result);
-  return finish();
+  result.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+  return result;
 }
 
 // Dispatches on the measurement name.

@@ -216,7 +216,7 @@ TuneStart RunStart(const Objective<Model, Meas>& objective, const TunerOptions& 
     from = ScaleShifted(from, is_log, noise, shift);
   }
   bool converged = false;
-  TuneStart st = o.form == TunerForm::kLbfgs
+  TuneStart st = o.solver == MlSolver::kLbfgs
                      ? RunLbfgs(objective, o, lower, upper, from, &converged, where)
                      : RunLeastSquares(objective, o, lower, upper, from, Meas::kDim, &converged,
                                        where);

@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "adaptive/estimators.h"
 #include "src/core/hash.h"
 #include "src/core/parse.h"
 #include "src/core/types.h"
@@ -134,9 +135,10 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
         v.Fail("role", "expected hand, tuned, oracle or other, got '" + nc.role + "'");
     }
     if (v.Has("tune-estimator")) {
-      nc.estimator = v.Get("tune-estimator")->text;
-      if (nc.estimator != "ml" && nc.estimator != "em" && nc.estimator != "als")
-        v.Fail("tune-estimator", "expected ml, em or als, got '" + nc.estimator + "'");
+      nc.estimator = v.Get("tune-estimator")->text;  // the estimator table's name
+      Checked(*v.Get("tune-estimator"), err, [](const std::string& t) {
+        return ParseEstimator(t, "tune-estimator", /*studies_only=*/true);
+      });
     }
     nc.init_scale = text_of("init-scale");
     if (v.Has("tune-per-run"))

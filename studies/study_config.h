@@ -100,6 +100,9 @@
 //                                    #   em: at most tune-max-iterations, default 1000)
 //   tune-max-iterations = 200        # optimiser / EM iterations
 //   tune-tolerance = 1e-6            # em: stop at this relative NLL change (default 1e-9)
+//   tune-solver = least-squares      # ml: lbfgs (default) | least-squares; every other
+//                                    #   key of `estlab tune`'s tuner key table as
+//                                    #   tune-<key> (tune-lags, tune-bound-width, ...)
 //   tune-per-run = true              # every run fits its own Q/R on its own measurements
 //                                    #   (default false: once before the runs); runs.csv
 //                                    #   gets id_status, id_q_err, id_r_err, ...

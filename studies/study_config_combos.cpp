@@ -8,9 +8,67 @@
 #include "src/io/output_file.h"
 #include "src/options/estimate_flags.h"
 #include "src/options/filter_settings.h"
+#include "src/options/tuner_settings.h"
 #include "studies/study_config_parts.h"
 
 namespace estlab::study_config {
+
+// The tuner keys of a [noise.*] section (tuner_settings.h, as tune-<key>),
+// and the study's own tune-datasets and tune-per-run.
+std::vector<std::string> StudyTuneKeys() {
+  std::vector<std::string> keys = {"tune-datasets", "tune-per-run"};
+  for (const TunerKey& k : TunerKeyTable())
+    if (k.in_studies) keys.push_back(StudyTunerKey(k));
+  return keys;
+}
+
+namespace {
+
+// The tuner options of a tuned [noise.*] section: its tune-<key> lines
+// through the tuner key table (BuildTunerOptions, as `estlab tune`), an
+// error reported at its line. The side not tuned is fixed; the tuned one's
+// parameterisation defaults to its guess's shape (the oracle's, when it
+// starts from the oracle: full when it has off-diagonal entries).
+TunerOptions StudyTunerOptions(const SectionValues& noise, const ScenarioConfig& sc, bool q_tuned,
+                               const std::string& q_shape, bool r_tuned,
+                               const std::string& r_shape, int n) {
+  const ConfigErrors& err = noise.errors();
+  if (noise.Has("tune-estimator"))  // studies offer ml, em and als
+    Checked(*noise.Get("tune-estimator"), err, [](const std::string& t) {
+      return ParseEstimator(t, "tune-estimator", /*studies_only=*/true);
+    });
+  TunerSettings settings;
+  for (const TunerKey& k : TunerKeyTable()) {
+    if (!k.in_studies || !noise.Has(StudyTunerKey(k))) continue;
+    settings.Set(k.name, noise.Get(StudyTunerKey(k))->text);
+  }
+  for (const auto& [which, tuned] : {std::pair<std::string, bool>{"q", q_tuned}, {"r", r_tuned}})
+    if (!tuned && noise.Has(which + "-param"))
+      noise.Fail(which + "-param", "needs " + which + " = tuned");
+  std::string q_guess = q_shape;
+  if (q_tuned && q_guess.empty() && sc.oracle_q_white_accel) q_guess = "q-white-accel";
+  for (int i = 0; q_tuned && q_guess.empty() && i < n * n && i < int(sc.oracle_q.size()); ++i)
+    if (i / n != i % n && sc.oracle_q[i] != 0.0) q_guess = "q";
+  TunerOptions t;
+  try {
+    t = BuildTunerOptions(settings, q_guess, r_shape);
+  } catch (const KeyError& e) {
+    for (const TunerKey& k : TunerKeyTable())
+      if (e.key() == k.name) noise.Fail(StudyTunerKey(k), e.message());
+    noise.FailSection(e.what());
+  } catch (const InputError& e) {
+    noise.FailSection(e.what());
+  }
+  for (const auto& [which, tuned] : {std::pair<std::string, bool>{"q", q_tuned}, {"r", r_tuned}}) {
+    NoiseParam& p = which == "q" ? t.q_param : t.r_param;
+    if (!tuned) p = NoiseParam::kFixed;
+    if (tuned && p == NoiseParam::kFixed)
+      noise.Fail(which + "-param", "fixed contradicts tuned");
+  }
+  return t;
+}
+
+}  // namespace
 
 // ---------------------------------------------------------------------------
 // Filter specs: the scenario's, filter's and noise section's keys fill one
@@ -207,31 +265,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     // A model file compiles its tuner now, on first use (the same entry).
     if (model.tune == nullptr) FindModel(sc.model_source, {.tuner = true});
     TunerOptions& t = combo.tuner;
-    auto param = [&](bool tuned, const std::string& which, const std::string& shape) {
-      if (!tuned) {
-        if (noise.Has(which + "-param"))
-          noise.Fail(which + "-param", "needs " + which + " = tuned");
-        return NoiseParam::kFixed;
-      }
-      if (noise.Has(which + "-param")) {
-        return Checked(*noise.Get(which + "-param"), err, [&](const std::string& t) {
-          const NoiseParam p = ParseNoiseParam(t, which + "-param");
-          if (p == NoiseParam::kFixed) throw InputError(which + "-param: fixed contradicts tuned");
-          return p;
-        });
-      }
-      if (shape == which + "-white-accel") return NoiseParam::kWhiteAccel;
-      if (shape == which) return NoiseParam::kFull;
-      if (shape.empty() && which == "q" && sc.oracle_q_white_accel) return NoiseParam::kWhiteAccel;
-      if (shape.empty() && which == "q") {
-        for (int i = 0; i < n; ++i)
-          for (int j = 0; j < n; ++j)
-            if (i != j && sc.oracle_q[i * n + j] != 0.0) return NoiseParam::kFull;
-      }
-      return NoiseParam::kDiag;
-    };
-    t.q_param = param(q_tuned, "q", q_shape);
-    t.r_param = param(r_tuned, "r", r_shape);
+    t = StudyTunerOptions(noise, sc, q_tuned, q_shape, r_tuned, r_shape, n);
     auto integer = [&](const std::string& key, int fallback, int min_value, int max_value) {
       if (!noise.Has(key)) return fallback;
       return Checked(*noise.Get(key), err, [&](const std::string& t) {
@@ -249,18 +283,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
         noise.Fail(key, "[" + sc.section + "] has no tune-data files to fit on");
       combo.tune_datasets = int(sc.tune_runs.size());
     }
-    t.starts = integer("tune-starts", 1, 1, 10000);
-    const std::string estimator =
-        noise.Has("tune-estimator") ? noise.Get("tune-estimator")->text : std::string("ml");
-    t.form = ParseTunerForm(estimator == "ml" ? "lbfgs" : estimator);
     t.em_compare_ml = false;  // the study scores EM's own solution
-    t.max_iterations = integer("tune-max-iterations", estimator == "em" ? 1000 : 200, 1, 1000000);
-    if (noise.Has("tune-tolerance")) {
-      if (estimator != "em") noise.Fail("tune-tolerance", "applies to tune-estimator = em");
-      t.em_tolerance = Checked(*noise.Get("tune-tolerance"), err, [](const std::string& v) {
-        return ParseNumber(v, "tune-tolerance");
-      });
-    }
     combo.tune_per_run = noise.Has("tune-per-run") &&
                          Checked(*noise.Get("tune-per-run"), err,
                                  [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
@@ -273,7 +296,6 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (combo.tune_per_run && noise.Has("tune-datasets"))
       noise.Fail("tune-datasets", "with tune-per-run each run fits on its own measurements");
     t.estimate = estimate;
-    t.burn_in = integer("tune-burn-in", 0, 0, kMaxSteps);
     t.compute_std_errors = true;
     std::string error;
     if (!t.IsValid(&error)) noise.FailSection(error);
@@ -281,9 +303,7 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
       err.Fail(filt.section().line, "[" + filt.section().full + "] with [" + sc.section +
                                         "] and [" + noise.section().full + "]: " + error);
   } else {
-    for (const char* key :
-         {"q-param", "r-param", "tune-datasets", "tune-starts", "tune-burn-in", "tune-estimator",
-          "tune-max-iterations", "tune-per-run", "tune-tolerance"})
+    for (const std::string& key : StudyTuneKeys())
       if (noise.Has(key)) noise.Fail(key, "applies only with q = tuned or r = tuned");
   }
   return combo;

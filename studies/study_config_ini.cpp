@@ -114,33 +114,9 @@ const std::vector<std::string> kScenarioKeys = [] {
   keys.insert(keys.end(), kRecordedKeys.begin(), kRecordedKeys.end());
   return keys;
 }();
-const std::vector<std::string> kNoiseKeys = {"q",
-                                             "q-diag",
-                                             "q-white-accel",
-                                             "r",
-                                             "r-diag",
-                                             "scenarios",
-                                             "filters",
-                                             "description",
-                                             "role",
-                                             "init-q-diag",
-                                             "init-q",
-                                             "init-q-white-accel",
-                                             "init-r-diag",
-                                             "init-r",
-                                             "q-param",
-                                             "r-param",
-                                             "tune-datasets",
-                                             "tune-starts",
-                                             "tune-burn-in",
-                                             "tune-estimator",
-                                             "tune-max-iterations",
-                                             "tune-tolerance",
-                                             "tune-per-run",
-                                             "init-scale",
-                                             "params",
-                                             "param-bounds",
-                                             "param-prior"};
+// The [noise.*] keys; the tuner's (tune-<key>, q-param, r-param) come from
+// the tuner key table (StudyTuneKeys).
+const std::vector<std::string> kNoiseOwnKeys = {"q", "q-diag", "q-white-accel", "r", "r-diag", "scenarios", "filters", "description", "role", "init-q-diag", "init-q", "init-q-white-accel", "init-r-diag", "init-r", "init-scale", "params", "param-bounds", "param-prior"};
 
 // ---------------------------------------------------------------------------
 // Reading the file with Program_options.
@@ -163,12 +139,14 @@ po::variables_map ParseWithProgramOptions(const std::string& text,
                                           const ConfigErrors& err) {
   po::options_description desc;
   const std::vector<std::string> filter_keys = FilterKeys();
+  std::vector<std::string> noise_keys = kNoiseOwnKeys;
+  for (const std::string& key : StudyTuneKeys()) noise_keys.push_back(key);
   for (const Section& sec : sections) {
     const std::vector<std::string>* keys = sec.kind == "study"      ? &kStudyKeys
                                            : sec.kind == "report"   ? &kReportKeys
                                            : sec.kind == "scenario" ? &kScenarioKeys
                                            : sec.kind == "filter"   ? &filter_keys
-                                                                    : &kNoiseKeys;
+                                                                    : &noise_keys;
     for (const auto& key : *keys)
       desc.add_options()((sec.full + "." + key).c_str(), po::value<std::string>());
     if (sec.kind == "report") {

@@ -63,8 +63,12 @@ std::vector<Section> Scan(const std::string& text, const ConfigErrors& err);
 
 // The keys of each section type.
 extern const std::vector<std::string> kStudyKeys, kReportKeys, kReportRepeatedKeys, kScenarioKeys,
-    kNoiseKeys;
+    kNoiseOwnKeys;
 std::vector<std::string> FilterKeys();
+// The tuner keys of a [noise.*] section (tune-<key>, q-param, r-param from
+// the tuner key table of src/options/tuner_settings.h) and the study's own
+// tune-datasets, tune-per-run.
+std::vector<std::string> StudyTuneKeys();
 
 // Reads the file with Program_options (unknown or repeated keys are errors
 // naming the line).

@@ -52,7 +52,7 @@ constexpr const char* kExamples = R"(Examples:
   # White-noise-acceleration qc and a scalar R, UKF, 4 starts, least squares, JSON:
   estlab tune --model double-pendulum --measure angles --filter ukf --alpha 1 --data a.csv \
       --data b.csv --x0 theta1=0.785398,theta2=0.523599 --init-q-white-accel 0.1 \
-      --init-r-scalar 0.01 --starts 4 --burn-in 20 --form least-squares --json
+      --init-r-scalar 0.01 --starts 4 --burn-in 20 --solver least-squares --json
   # The same by expectation-maximisation (the EKF's RTS smoother as E-step;
   # the report adds the likelihood tuner's NLL from EM's solution), and by
   # autocovariance least squares on 15 lags of the innovations:
@@ -103,7 +103,7 @@ EKF, of the flow Jacobian's variational system) carry the same derivatives,
 with CVODES run at rtol <= 1e-10, atol <= 1e-12.
 
 Estimators: ml (default) minimises that NLL (projected L-BFGS, or Ceres'
-Levenberg-Marquardt with --form least-squares). em alternates the filter's
+Levenberg-Marquardt with --solver least-squares). em alternates the filter's
 smoother (kf -> RTS, ekf -> ERTS, ukf/ckf/ghkf -> sigma-point RTS)
 with the closed-form maximiser of Q and R for each --q-param/--r-param; exact
 for the kf, where the NLL never rises from one iteration to the next, and an
@@ -116,7 +116,11 @@ squares to the innovation autocovariances at lags 0..--lags-1 after
 --burn-in updates; kf and ekf (linearised along its own estimates), every
 row measured. Its report says which elements of Q and R the lags identify;
 it has no standard errors. em and als take one start and no --estimate-param;
-em takes no --burn-in.
+em takes no --burn-in. A key of another estimator (--lags with em, --solver
+with als, ...) is an error, never ignored. Every tuner key above may also be
+a line of a --config file (estimator = em, starts = 4, ...; the command line
+wins) and, as tune-<key> (q-param, r-param as they are), of a study's
+[noise.*] section. --form is the old name of --solver.
 
 Bounds: each log parameter within its initial value +- --bound-width (20),
 or within --log-lower .. --log-upper (one value for all, or one per
@@ -193,11 +197,12 @@ void ExpandScalarOption(const po::variables_map& vm, const std::string& scalar_o
   settings->Set(diag_opt, diag);
 }
 
-NoiseParam DefaultParam(const po::variables_map& vm, const std::string& which) {
-  if (vm.count("init-" + which + "-white-accel")) return NoiseParam::kWhiteAccel;
-  if (vm.count("init-" + which + "-scalar")) return NoiseParam::kScalar;
-  if (vm.count("init-" + which)) return NoiseParam::kFull;
-  return NoiseParam::kDiag;
+// The key the initial guess of Q ("q") or R ("r") came from, without "init-"
+// (NoiseParamOfGuess: its shape is the default parameterisation); "" when none.
+std::string GuessKey(const po::variables_map& vm, const std::string& which) {
+  for (const char* tail : {"-white-accel", "-scalar", "", "-diag"})
+    if (vm.count("init-" + which + std::string(tail))) return which + std::string(tail);
+  return "";
 }
 
 bool IsDiagonal(const std::vector<double>& a, int n) {
@@ -302,15 +307,16 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
   std::cout << "model         " << model.name << ", measurement " << spec.measurement << ", filter "
             << FilterKindName(spec.kind()) << (spec.iterated() ? " (iterated)" : "")
             << "\ndata          " << n_data << " dataset(s), " << r.updates
-            << " innovations after burn-in\nform          " << r.form << ", " << r.starts.size()
+            << " innovations after burn-in\nestimator     " << r.estimator
+            << (r.solver.empty() ? "" : " (" + r.solver + ")") << ", " << r.starts.size()
             << " start(s), status " << TuneStatusName(r.status) << "\n";
   if (!r.IsSolutionUsable()) {
     std::cout << "              " << r.message << "\n";
     return;
   }
-  if (r.form == std::string("als")) {
+  if (r.estimator == std::string("als")) {
     std::cout << "ALS           " << r.termination << " (" << r.iterations << " iterations)\n";
-  } else if (r.form == std::string("em")) {
+  } else if (r.estimator == std::string("em")) {
     std::cout << "EM            " << r.termination << " (" << r.iterations << " iterations"
               << (r.nll_increases ? ", NLL rose at " + std::to_string(r.nll_increases) : "")
               << ")\n";
@@ -371,7 +377,10 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   JsonWriter j;
   j.BeginObject().Key("model").Value(model.name).Key("measurement").Value(spec.measurement);
-  j.Key("filter").Value(FilterKindName(spec.kind())).Key("form").Value(r.form);
+  j.Key("filter").Value(FilterKindName(spec.kind())).Key("estimator").Value(r.estimator);
+  j.Key("solver").Value(r.solver);
+  // "form": the solver of ml, else the estimator (the key before issue 33).
+  j.Key("form").Value(r.solver.empty() ? r.estimator : r.solver);
   j.Key("status").Value(TuneStatusName(r.status)).Key("message").Value(r.message);
   if (r.IsSolutionUsable()) {
     j.Key("tuned").BeginObject().Key("q");
@@ -406,7 +415,7 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
   j.Key("iterations").Value(r.iterations).Key("termination").Value(r.termination);
   j.Key("trace").Value(r.trace);
   j.Key("wall_s").Value(r.wall_s);
-  if (r.form == std::string("em")) {
+  if (r.estimator == std::string("em")) {
     j.Key("em").BeginObject().Key("nll_history").Value(r.nll_history);
     j.Key("iteration_wall_s").Value(r.iteration_wall_s).Key("nll_increases").Value(r.nll_increases);
     j.Key("nll_ml_from_em").Value(r.nll_ml_from_em).EndObject();
@@ -526,11 +535,6 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
   return PlotRun(model, meas, data, run, plot);
 }
 
-std::vector<double> BoundList(const po::variables_map& vm, const std::string& opt) {
-  if (!vm.count(opt)) return {};
-  return ParseList(vm[opt].as<std::string>(), "--" + opt);
-}
-
 // The output-error branch of `estlab tune`: fit, validate, write --out (only
 // a converged fit, or with --keep-best the best point named as such), report.
 int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& spec,
@@ -602,32 +606,9 @@ int RunTune(const std::vector<std::string>& args) {
       "data", po::value<std::vector<std::string>>()->composing(), "training data CSV (repeatable)")(
       "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
       "init-r-scalar", po::value<std::string>(), "initial R = s I")(
-      "q-param", po::value<std::string>(),
-      "diag | full | white-accel | scalar | fixed (default: the --init-q* shape)")(
-      "r-param", po::value<std::string>(),
-      "diag | full | scalar | fixed (default: the --init-r* shape)")(
-      "starts", po::value<int>()->default_value(1),
-      "number of starts (1 = the initial guess only)")(
-      "jobs", po::value<int>()->default_value(1),
-      "threads running the starts (same result for any value)")(
       "keep-best",
       "write --out even when the fit is not verified converged (the best admissible point, "
-      "named as such in the file)")("start-spread", po::value<std::string>()->default_value("2"),
-                                    "Latin hypercube half-width in log space")(
-      "burn-in", po::value<int>()->default_value(0),
-      "updates skipped at the start of each dataset")(
-      "form", po::value<std::string>()->default_value("lbfgs"), "lbfgs | least-squares")(
-      "bound-width", po::value<std::string>()->default_value("20"),
-      "log parameters within initial +- this")(
-      "log-lower", po::value<std::string>(),
-      "lower bound(s) of the log parameters: one, or one per parameter")(
-      "log-upper", po::value<std::string>(), "upper bound(s) of the log parameters")(
-      "max-iterations", po::value<int>(),
-      "optimiser iterations per start (default 200), EM iterations (default 1000)")(
-      "max-integrator-steps", po::value<long>()->default_value(200),
-      "--integrator cvodes: CVODES steps per interval allowed at a trial point, on average "
-      "(+10^4; x5 for a stiff model), 100x in one interval; a point needing more is "
-      "infeasible")(
+      "named as such in the file)")(
       "estimate-param", po::value<std::string>(),
       "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
       "param-bounds", po::value<std::string>(),
@@ -640,13 +621,6 @@ int RunTune(const std::vector<std::string>& args) {
       "x0-per-file",
       "with --estimate-x0: each --data file its own initial state (the "
       "parameters shared)")(
-      "estimator", po::value<std::string>()->default_value("ml"),
-      "ml (prediction-error maximum likelihood) | em (expectation-maximisation, the "
-      "smoother as E-step) | als (autocovariance least squares, kf/ekf) | output-error (free "
-      "simulation, least squares)")("lags", po::value<int>()->default_value(10),
-                                    "als: innovation autocovariance lags 0..N-1 fitted")(
-      "tolerance", po::value<std::string>()->default_value("1e-9"),
-      "em: stop when the relative NLL change is at most this")(
       "plot", po::value<std::string>(),
       "draw the tuned filter on the first --validate (else --data) file into folder DIR, with "
       "the convergence")("horizon", po::value<std::string>()->default_value("0.5"),
@@ -663,6 +637,7 @@ int RunTune(const std::vector<std::string>& args) {
       "out", po::value<std::string>(),
       "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
       "json", "print a JSON summary");
+  AddTunerOptions(&desc);
   AddFilterOptions(&desc, "init-");
   AddTruthOptions(&desc);
   AddConfigOption(&desc);
@@ -691,9 +666,12 @@ int RunTune(const std::vector<std::string>& args) {
   } else if (vm.count("profile-out")) {
     throw InputError("--profile-out needs --profile");
   }
+  TunerOptions options = BuildTunerOptions(TunerSettingsFromVariablesMap(vm), GuessKey(vm, "q"),
+                                           GuessKey(vm, "r"));
+  const EstimatorInfo& estimator = InfoOf(options.estimator);
   // Output error simulates: a model file needs no tuner compiled for it.
-  const bool output_error = vm["estimator"].as<std::string>() == "output-error";
-  if ((vm.count("estimate-x0") || vm.count("x0-per-file")) && !output_error)
+  const bool output_error = !estimator.tuner;
+  if ((vm.count("estimate-x0") || vm.count("x0-per-file")) && !estimator.x0)
     throw InputError(std::string(vm.count("estimate-x0") ? "--estimate-x0" : "--x0-per-file") +
                      " applies to --estimator output-error (the prediction-error fit of the "
                      "initial state is not built yet)");
@@ -709,46 +687,8 @@ int RunTune(const std::vector<std::string>& args) {
   ExpandScalarOption(vm, "init-r-scalar", "init-r-diag", {"init-r-diag", "init-r"}, m, &settings);
   const FilterSpec spec = estlab::BuildFilterSpec(settings, model);
 
-  TunerOptions options;
-  options.q_param = vm.count("q-param")
-                        ? ParseNoiseParam(vm["q-param"].as<std::string>(), "--q-param")
-                        : DefaultParam(vm, "q");
-  options.r_param = vm.count("r-param")
-                        ? ParseNoiseParam(vm["r-param"].as<std::string>(), "--r-param")
-                        : DefaultParam(vm, "r");
-  if (options.r_param == NoiseParam::kWhiteAccel)
-    throw InputError("--r-param: white-accel applies to Q only");
-  options.form = ParseTunerForm(vm["form"].as<std::string>());
-  options.starts = vm["starts"].as<int>();
-  options.jobs = vm["jobs"].as<int>();
-  options.start_spread = ParseNumber(vm["start-spread"].as<std::string>(), "--start-spread");
-  options.burn_in = vm["burn-in"].as<int>();
-  options.bound_width = ParseNumber(vm["bound-width"].as<std::string>(), "--bound-width");
-  options.log_lower = BoundList(vm, "log-lower");
-  options.log_upper = BoundList(vm, "log-upper");
   options.seed = SeedOf(settings);
   auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
-  const std::string estimator = vm["estimator"].as<std::string>();
-  if (estimator != "ml" && estimator != "em" && estimator != "als" && estimator != "output-error")
-    throw InputError("--estimator: expected ml, em, als or output-error, got '" + estimator + "'");
-  if (estimator == "als") {
-    if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
-    options.form = TunerForm::kAls;
-    options.als_lags = vm["lags"].as<int>();
-  } else if (!vm["lags"].defaulted()) {
-    throw InputError("--lags applies to --estimator als");
-  }
-  options.max_integrator_steps = vm["max-integrator-steps"].as<long>();
-  options.max_iterations = vm.count("max-iterations") ? vm["max-iterations"].as<int>()
-                           : estimator == "em"        ? 1000
-                                                      : 200;
-  if (estimator == "em") {
-    if (!vm["form"].defaulted()) throw InputError("--form applies to --estimator ml");
-    options.form = TunerForm::kEm;
-    options.em_tolerance = ParseNumber(vm["tolerance"].as<std::string>(), "--tolerance");
-  } else if (!vm["tolerance"].defaulted()) {
-    throw InputError("--tolerance applies to --estimator em");
-  }
   const double horizon = ParseNumber(vm["horizon"].as<std::string>(), "--horizon");
   if (!(horizon > 0)) throw InputError("--horizon must be > 0 s, got " + FormatNumber(horizon));
   options.estimate =
@@ -762,7 +702,7 @@ int RunTune(const std::vector<std::string>& args) {
   for (const auto& path : vm["data"].as<std::vector<std::string>>()) {
     // Output-error starts its free simulations from the recorded states:
     // there the state columns are the method's input, not truth to score.
-    const bool states = estimator == "output-error" || ResolveTruth(vm, path, model).read;
+    const bool states = output_error || ResolveTruth(vm, path, model).read;
     datasets.push_back(LoadFilterData(path, model, meas, renames, states, ConstantInputGiven(vm)));
     CheckPriorTime(spec, datasets.back());
   }
@@ -780,7 +720,7 @@ int RunTune(const std::vector<std::string>& args) {
     if (!named)
       throw InputError("--profile: '" + profile_request->name + "' is not in --estimate-param");
   }
-  if (estimator == "output-error") {
+  if (output_error) {
     if (profile_request) throw InputError("--profile applies to --estimator ml");
     return TuneOutputError(vm, model, spec, options, datasets, horizon, &out, out_path);
   }

@@ -80,6 +80,27 @@ void AddFilterOptions(po::options_description* desc, const std::string& np) {
   }
 }
 
+void AddTunerOptions(po::options_description* desc) {
+  for (const TunerKey& k : TunerKeyTable()) {
+    if (k.default_text != nullptr)
+      desc->add_options()(k.name, po::value<std::string>()->default_value(k.default_text), k.help);
+    else
+      desc->add_options()(k.name, po::value<std::string>(), k.help);
+  }
+  desc->add_options()("form", po::value<std::string>(), "the old name of --solver");
+}
+
+TunerSettings TunerSettingsFromVariablesMap(const po::variables_map& vm) {
+  TunerSettings s;
+  for (const TunerKey& k : TunerKeyTable())
+    if (vm.count(k.name) && !vm[k.name].defaulted()) s.Set(k.name, vm[k.name].as<std::string>());
+  if (vm.count("form")) {
+    if (s.Given("solver")) throw InputError("--form is the old name of --solver: give one");
+    s.Set("solver", vm["form"].as<std::string>());
+  }
+  return s;
+}
+
 FilterSettings SettingsFromVariablesMap(const po::variables_map& vm, const std::string& np) {
   FilterSettings s(np);
   for (const FilterKey& k : FilterKeyTable()) {
@@ -169,6 +190,7 @@ void MergeConfigFiles(po::variables_map* vm, const std::string& np) {
   const bool cmd_q = any_given(q_keys), cmd_r = any_given(r_keys);
   po::options_description file_desc;
   AddFilterOptions(&file_desc, "");
+  if (np == "init-") AddTunerOptions(&file_desc);
   for (const std::string& path : files) {
     std::ifstream in(path);
     if (!in) throw InputError("--config: cannot read '" + path + "'");

@@ -10,6 +10,7 @@
 
 #include "src/options/column_map.h"
 #include "src/options/filter_settings.h"
+#include "src/options/tuner_settings.h"
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
 
@@ -22,6 +23,13 @@ namespace estlab::cli {
 void AddFilterOptions(boost::program_options::options_description* desc,
                       const std::string& noise_prefix = "");
 
+// Adds every tuner option of the key table (tuner_settings.h) and --form,
+// the old name of --solver (`estlab tune`).
+void AddTunerOptions(boost::program_options::options_description* desc);
+// The tuner options given on the command line or in a --config file (--form
+// as solver; defaults left to the key table).
+TunerSettings TunerSettingsFromVariablesMap(const boost::program_options::variables_map& vm);
+
 // Adds --config FILE (repeatable): filter options as 'key = value' lines,
 // e.g. the tuned.ini that 'estlab tune --out' writes.
 void AddConfigOption(boost::program_options::options_description* desc);
@@ -33,6 +41,8 @@ void AddConfigOption(boost::program_options::options_description* desc);
 // kept, and a Q (or R) option on the command line replaces every Q (R)
 // option of the file. Earlier files win over later ones. Throws InputError
 // naming the file for an unreadable file, an unknown key or a bad value.
+// For the tuner (noise_prefix "init-") the file may also hold tuner keys
+// (estimator = em, starts = 4, ...).
 void MergeConfigFiles(boost::program_options::variables_map* vm,
                       const std::string& noise_prefix = "");
 

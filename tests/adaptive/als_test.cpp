@@ -1,4 +1,4 @@
-// Tests of autocovariance least squares (adaptive/als.h, TunerForm::kAls):
+// Tests of autocovariance least squares (adaptive/als.h, Estimator::kAls):
 //   * the 3-state example of Odelson, Rajamani & Rawlings (Automatica 2006):
 //     over 50 simulated datasets of 5000 samples the mean ALS estimate of
 //     every element of Q and R is within 3 Monte Carlo standard errors of
@@ -105,7 +105,7 @@ FilterSpec WrongGainSpec() {
 
 TunerOptions AlsOptions(int lags) {
   TunerOptions o;
-  o.form = TunerForm::kAls;
+  o.estimator = Estimator::kAls;
   o.q_param = NoiseParam::kDiag;
   o.r_param = NoiseParam::kDiag;
   o.als_lags = lags;

@@ -1,4 +1,4 @@
-// Tests of EM for Q and R (adaptive/em.h, TunerForm::kEm), against the
+// Tests of EM for Q and R (adaptive/em.h, Estimator::kEm), against the
 // likelihood tuner as the independent reference:
 //   * linear model, KF, white-accel Q and R over 20 datasets: the exact
 //     innovation NLL never rises from one EM iteration to the next, and EM's
@@ -48,7 +48,7 @@ TEST(EmLinear, LikelihoodNeverFallsAndEmReachesTheLikelihoodTunersOptimum) {
   ml.q_param = NoiseParam::kWhiteAccel;
   ml.r_param = NoiseParam::kDiag;
   TunerOptions em = ml;
-  em.form = TunerForm::kEm;
+  em.estimator = Estimator::kEm;
   em.em_tolerance = 1e-12;
   em.max_iterations = 5000;
   double worst_rise = -1e300, worst_gap = 0.0, worst_nll_gap = 0.0;
@@ -98,7 +98,7 @@ TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
   ml.q_param = NoiseParam::kDiag;
   ml.r_param = NoiseParam::kFull;
   TunerOptions em = ml;
-  em.form = TunerForm::kEm;
+  em.estimator = Estimator::kEm;
   em.em_tolerance = 1e-12;
   em.max_iterations = 20000;
   const TuneResult e = TuneWith<Cv2, Cv2::Positions>(spec, em, data);
@@ -138,7 +138,7 @@ TEST(EmPendulum, ApproximateEStepLowersTheNllAndReportsTheMlOptimumBeside) {
   spec.q = {1e-4, 0.0, 0.0, 1e-2};
   spec.r = {1.0};
   TunerOptions em;
-  em.form = TunerForm::kEm;
+  em.estimator = Estimator::kEm;
   em.q_param = NoiseParam::kDiag;
   em.r_param = NoiseParam::kDiag;
   em.max_iterations = 300;
@@ -155,7 +155,7 @@ TEST(EmPendulum, ApproximateEStepLowersTheNllAndReportsTheMlOptimumBeside) {
 
 TEST(EmInput, OptionsEmDoesNotTakeAreRefused) {
   TunerOptions em;
-  em.form = TunerForm::kEm;
+  em.estimator = Estimator::kEm;
   std::string error;
   EXPECT_TRUE(em.IsValid(&error)) << error;
   TunerOptions burn = em;

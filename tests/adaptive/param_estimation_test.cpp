@@ -292,13 +292,13 @@ TEST(ParamEstimation, BoundsHoldAndAreFlagged) {
   const std::vector<FilterData> data = {PendulumData(81, 600)};
   TunerOptions options = Options({"L", "b"});
   options.estimate[1].upper = 0.2;  // truth 0.3
-  for (TunerForm form : {TunerForm::kLbfgs, TunerForm::kLeastSquares}) {
-    options.form = form;
+  for (MlSolver form : {MlSolver::kLbfgs, MlSolver::kLeastSquares}) {
+    options.solver = form;
     const TuneResult r = TuneWith<P, P::Angle>(Spec(EkfOptions{}), options, data);
     ASSERT_TRUE(r.IsSolutionUsable()) << r.message;
-    EXPECT_LE(r.param_values[1], 0.2 + 1e-12) << TunerFormName(form);
-    EXPECT_TRUE(r.at_bound[3]) << TunerFormName(form);
-    EXPECT_FALSE(r.at_bound[2]) << TunerFormName(form);
+    EXPECT_LE(r.param_values[1], 0.2 + 1e-12) << MlSolverName(form);
+    EXPECT_TRUE(r.at_bound[3]) << MlSolverName(form);
+    EXPECT_FALSE(r.at_bound[2]) << MlSolverName(form);
   }
 }
 

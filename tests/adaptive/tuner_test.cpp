@@ -107,11 +107,11 @@ TEST(TunerLinear, LeastSquaresFormReachesTheSameOptimum) {
   TunerOptions options;
   options.q_param = NoiseParam::kWhiteAccel;
   const TuneResult lbfgs = TuneWith<Cv, Cv::Positions>(spec, options, data);
-  options.form = TunerForm::kLeastSquares;
+  options.solver = MlSolver::kLeastSquares;
   const TuneResult ls = TuneWith<Cv, Cv::Positions>(spec, options, data);
   ASSERT_TRUE(lbfgs.IsSolutionUsable() && ls.IsSolutionUsable()) << ls.message;
-  EXPECT_EQ(lbfgs.form, "lbfgs");
-  EXPECT_EQ(ls.form, "least-squares");
+  EXPECT_EQ(lbfgs.solver, "lbfgs");
+  EXPECT_EQ(ls.solver, "least-squares");
   std::printf("  lbfgs: NLL %.9f (%d iterations), least-squares: NLL %.9f (%d iterations)\n",
               lbfgs.nll_tuned, lbfgs.iterations, ls.nll_tuned, ls.iterations);
   EXPECT_NEAR(ls.nll_tuned, lbfgs.nll_tuned, 1e-6 * std::abs(lbfgs.nll_tuned));
@@ -125,18 +125,18 @@ TEST(TunerLinear, BoundsHoldAndAreFlagged) {
   const std::vector<FilterData> data = {
       Simulate<Cv, Cv::Positions>(Integrator::kEuler, Vec<double, 2>(0.0, 1.0), dt, 1000,
                                   WhiteAccel<Cv>(2.0, dt), Mat<1, 1>::Constant(0.25), 7)};
-  for (TunerForm form : {TunerForm::kLbfgs, TunerForm::kLeastSquares}) {
+  for (MlSolver form : {MlSolver::kLbfgs, MlSolver::kLeastSquares}) {
     TunerOptions options;
     options.q_param = NoiseParam::kWhiteAccel;
-    options.form = form;
+    options.solver = form;
     options.log_lower = {-10.0, -10.0};
     options.log_upper = {10.0, std::log(0.1)};
     const TuneResult r = TuneWith<Cv, Cv::Positions>(CvSpec(0.3, 0.05), options, data);
     ASSERT_TRUE(r.IsSolutionUsable()) << r.message;
-    EXPECT_LE(r.theta[1], std::log(0.1) + 1e-12) << TunerFormName(form);
-    EXPECT_NEAR(r.r[0], 0.1, 1e-6) << TunerFormName(form);
-    EXPECT_TRUE(r.at_bound[1]) << TunerFormName(form);
-    EXPECT_FALSE(r.at_bound[0]) << TunerFormName(form);
+    EXPECT_LE(r.theta[1], std::log(0.1) + 1e-12) << MlSolverName(form);
+    EXPECT_NEAR(r.r[0], 0.1, 1e-6) << MlSolverName(form);
+    EXPECT_TRUE(r.at_bound[1]) << MlSolverName(form);
+    EXPECT_FALSE(r.at_bound[0]) << MlSolverName(form);
   }
 }
 

@@ -326,7 +326,7 @@ TEST(TunerVerdict, TwoHundredRandomStartsStayAdmissibleAndHonest) {
     o.jobs = 2;
     o.seed = seed;
     o.max_iterations = 150;
-    o.form = seed % 2 ? TunerForm::kLbfgs : TunerForm::kLeastSquares;
+    o.solver = seed % 2 ? MlSolver::kLbfgs : MlSolver::kLeastSquares;
     g_evaluations = g_outside = 0;
     const TuneResult r = TuneWith<TwoTank, TwoTank::Levels>(TankSpec(), o, data);
     evaluations += g_evaluations, outside += g_outside;
@@ -337,7 +337,7 @@ TEST(TunerVerdict, TwoHundredRandomStartsStayAdmissibleAndHonest) {
     };
     CheckFit(lik, r, admissible, false, &counts);
     std::printf("  seed %d (%s): %s, NLL %.2f -> %.2f, l1 %.3g l2 %.3g a1 %.3g a2 %.3g\n",
-                int(seed), r.form.c_str(), TuneStatusName(r.status), r.nll_initial, r.nll_tuned,
+                int(seed), r.solver.c_str(), TuneStatusName(r.status), r.nll_initial, r.nll_tuned,
                 r.param_values[0], r.param_values[1], r.param_values[2], r.param_values[3]);
   }
   std::printf(
@@ -412,11 +412,11 @@ TEST(TunerVerdict, ASaddleIsNotAMinimumAndNamesItsDirection) {
   // a = 0 is a stationary point by symmetry (d(a^2)/da = 0), a maximum in a;
   // b moves to its minimum, so the optimiser stops at a saddle.
   const std::vector<FilterData> data = {WellsData(3, 200, 1.0, 0.5)};
-  for (TunerForm form : {TunerForm::kLbfgs, TunerForm::kLeastSquares}) {
+  for (MlSolver form : {MlSolver::kLbfgs, MlSolver::kLeastSquares}) {
     TunerOptions o = WellsOptions(-3.0, 3.0);
-    o.form = form;
+    o.solver = form;
     const TuneResult r = TuneWith<Wells, Wells::Both>(WellsSpec(0.0, 0.4, 0.0), o, data);
-    std::printf("  %s: %s: %s\n", r.form.c_str(), TuneStatusName(r.status), r.message.c_str());
+    std::printf("  %s: %s: %s\n", r.solver.c_str(), TuneStatusName(r.status), r.message.c_str());
     EXPECT_EQ(r.status, TuneStatus::kNotAMinimum) << r.message;
     // The direction is a alone (b's curvature is positive and separate).
     EXPECT_NE(r.message.find("along 1 a ("), std::string::npos) << r.message;

@@ -199,7 +199,7 @@ TEST(StudyIdentificationConfig, BadKeysNameTheirLine) {
        "[noise.oracle]\nq = oracle\nr = oracle\ninit-scale = 2\n",
        "[noise.oracle] init-scale: scales the oracle start"},
       {"tune-estimator = em\ntune-tolerance = 1e-7", "tune-tolerance = 1e-7",
-       "[noise.em] tune-tolerance: applies to tune-estimator = em"},
+       "[noise.em] tune-tolerance: applies to the em estimator only (the estimator is ml)"},
       {"[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = true",
        "[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = maybe",
        "[noise.ml] tune-per-run: expected true or false, got 'maybe'"},
@@ -219,6 +219,46 @@ TEST(StudyIdentificationConfig, BadKeysNameTheirLine) {
         << "got: " << message << "\nexpected: " << c.expect;
     EXPECT_EQ(message.rfind("s.ini:", 0), 0u) << message;
   }
+}
+
+// Every tuner key of `estlab tune` is a tune-<key> of a [noise.*] section
+// (one table, src/options/tuner_settings.cpp): the ml estimator's solver and
+// multi-start reach the combination's TunerOptions, EM's keys its own.
+TEST(StudyIdentificationConfig, TuneKeysReachTheTunerOptions) {
+  const std::string text = Replace(
+      Replace(IdentificationStudy(2), "[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = true",
+              "[noise.ml]\nq = tuned\nr = tuned\ntune-per-run = true\ntune-solver = "
+              "least-squares\ntune-starts = 3\ntune-start-spread = 1.5"),
+      "tune-tolerance = 1e-7", "tune-tolerance = 1e-7\ntune-max-iterations = 77");
+  const StudyConfig config = ParseStudyConfig(text, "s.ini");
+  int seen = 0;
+  for (const Combo& c : config.scenarios.at(0).combos) {
+    const std::string& noise = config.noises.at(c.noise).name;
+    if (noise == "ml") {
+      EXPECT_EQ(c.tuner.estimator, Estimator::kMl);
+      EXPECT_EQ(c.tuner.solver, MlSolver::kLeastSquares);
+      EXPECT_EQ(c.tuner.starts, 3);
+      EXPECT_EQ(c.tuner.start_spread, 1.5);
+      ++seen;
+    } else if (noise == "em") {
+      EXPECT_EQ(c.tuner.estimator, Estimator::kEm);
+      EXPECT_EQ(c.tuner.em_tolerance, 1e-7);
+      EXPECT_EQ(c.tuner.max_iterations, 77);
+      ++seen;
+    } else if (noise == "ml-x0_01") {
+      EXPECT_EQ(c.tuner.solver, MlSolver::kLbfgs);
+      EXPECT_EQ(c.tuner.max_iterations, 200);
+      ++seen;
+    }
+  }
+  EXPECT_EQ(seen, 3);
+  const std::string err = ErrorText([&] {
+    ParseStudyConfig(Replace(text, "tune-starts = 3", "tune-starts = 3\ntune-lags = 4"), "s.ini");
+  });
+  EXPECT_NE(err.find("tune-lags: applies to the als estimator only (the estimator is ml)"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.rfind("s.ini:", 0), 0u) << err;
 }
 
 }  // namespace
