@@ -6,8 +6,8 @@
 //
 // One iteration at the current Q, R:
 //   E-step  run the filter and its RTS smoother over every dataset
-//           (RunFilterWith with smooth and the lag-one covariances, the code
-//           of `estlab smooth --full-cov`), giving for each row k the
+//           (RunFilterWith with smooth, returning its typed SmoothedMoments:
+//           the numbers `estlab smooth --full-cov` writes), giving for each row k the
 //           smoothed x^s_k, P^s_k and Cov(x_k, x_{k+1} | all data) = C^s_k;
 //   M-step  with f the filter's noise-free process map and h its
 //           measurement (InnovationLikelihood::PointTransition,
@@ -75,50 +75,6 @@ struct EmSums {
   long measurements = 0;            // K_z
 };
 
-// Row k of a smoothed run: x^s_k, P^s_k and C^s_k (NaN on the last row).
-template <int N>
-struct SmoothedRow {
-  Vec<double, N> x;
-  Mat<N, N> P;
-  Mat<N, N> lag_one;
-};
-
-// The smoothed rows of `estlab smooth --full-cov` (columns <s>_est, <s>_var,
-// cov_<a>_<b>, lag1_<a>_<b>), read back by name.
-template <class Model>
-std::vector<SmoothedRow<Model::kStateDim>> ReadSmoothedRows(const FilterRunOutput& out) {
-  constexpr int N = Model::kStateDim;
-  auto column = [&](const std::string& name) {
-    const auto it = std::find(out.columns.begin(), out.columns.end(), name);
-    if (it == out.columns.end()) throw NumericalError("EM: the smoother wrote no column " + name);
-    return size_t(it - out.columns.begin());
-  };
-  const auto& names = Model::kStateNames;
-  std::vector<size_t> est(N), var(N), lag(N * N), cov(N * N, 0);
-  for (int i = 0; i < N; ++i) {
-    est[i] = column(std::string(names[i]) + "_est");
-    var[i] = column(std::string(names[i]) + "_var");
-    for (int j = 0; j < N; ++j) {
-      lag[i * N + j] = column(std::string("lag1_") + names[i] + "_" + names[j]);
-      if (j > i) cov[i * N + j] = column(std::string("cov_") + names[i] + "_" + names[j]);
-    }
-  }
-  std::vector<SmoothedRow<N>> rows(out.rows.size());
-  for (size_t k = 0; k < out.rows.size(); ++k) {
-    const std::vector<double>& r = out.rows[k];
-    SmoothedRow<N>& s = rows[k];
-    for (int i = 0; i < N; ++i) {
-      s.x(i) = r[est[i]];
-      s.P(i, i) = r[var[i]];
-      for (int j = 0; j < N; ++j) {
-        s.lag_one(i, j) = r[lag[i * N + j]];
-        if (j > i) s.P(i, j) = s.P(j, i) = r[cov[i * N + j]];
-      }
-    }
-  }
-  return rows;
-}
-
 // Cubature points of N(mean, cov): the rule's own DrawSigmaPoints, with a
 // jitter of 1e-12 of the mean variance when cov is only semidefinite.
 template <int D>
@@ -133,8 +89,9 @@ bool CubaturePoints(const SigmaPointSet& set, const Vec<double, D>& mean, const 
 // Adds A_k of the transition from row a to row b (times t0 -> t1, input u).
 template <class Model, class Meas>
 bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& joint,
-                   const SmoothedRow<Model::kStateDim>& a, const SmoothedRow<Model::kStateDim>& b,
-                   double t0, double t1, double u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                   const SmoothedMoments<Model::kStateDim>& a,
+                   const SmoothedMoments<Model::kStateDim>& b, double t0, double t1, double u,
+                   EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   Vec<double, 2 * N> mean;
   mean << a.x, b.x;
@@ -173,7 +130,7 @@ bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPoin
 // Adds B_k of a measured row.
 template <class Model, class Meas>
 bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& state,
-                    const SmoothedRow<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
+                    const SmoothedMoments<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
                     EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
@@ -199,14 +156,13 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
   static thread_local const SigmaPointSet state = MakeSigmaPointSet(N, cubature);
   FilterSpec smooth = spec;
   smooth.smooth = true;
-  smooth.full_cov = true;
+  std::vector<SmoothedMoments<N>> rows;
   for (const FilterData& d : datasets) {
-    const FilterRunOutput out = RunFilterWith<Model, Meas>(smooth, d);
+    const FilterRunOutput out = RunFilterWith<Model, Meas>(smooth, d, &rows);
     if (!out.summary.ok) {
       *why = out.summary.message;
       return false;
     }
-    const std::vector<SmoothedRow<N>> rows = ReadSmoothedRows<Model>(out);
     const std::string where = d.path.empty() ? "" : " of " + d.path;
     const bool complete = ForEachStep<Meas::kDim>(
         spec, d,

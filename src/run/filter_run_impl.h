@@ -74,6 +74,19 @@ struct RowRecord {
   size_t step = 0;  // the smoother's step (smoother_recorder.h)
 };
 
+// Row k of a smoothed run as typed moments, for code that runs the smoother
+// itself (EM's E-step, adaptive/em.h): x^s_k, P^s_k and the lag-one
+// cross-covariance C^s_k = Cov(x_k, x_{k+1} | all data) (NaN on the last
+// row and for the particle smoother). The same numbers as the row columns
+// <s>_est, <s>_var, cov_<a>_<b> and lag1_<a>_<b> of `estlab smooth
+// --full-cov`.
+template <int N>
+struct SmoothedMoments {
+  Vec<double, N> x;
+  Mat<N, N> P;
+  Mat<N, N> lag_one;
+};
+
 // Which columns a run writes (EstimateColumns).
 struct RowLayout {
   bool full_cov = false;
@@ -228,11 +241,13 @@ inline bool IsParticle(const FilterSpec& spec) { return spec.kind() == FilterKin
 // the rows and error statistics are the smoother's. A backward pass that
 // fails leaves no rows (a filtered row under a smoother's name would be
 // silently wrong) and the status "smoother failed" naming the step.
+// With moments, each record's smoothed moments too (lag-one included).
 template <class Model, class Meas>
 void SmoothRecords(const FilterData& data, const RowLayout& layout,
                    SmootherRecorder<Model, Meas>* smoother,
                    std::vector<RowRecord<Model::kStateDim, Meas::kDim>>* records,
-                   FilterRunOutput* out) {
+                   FilterRunOutput* out,
+                   std::vector<SmoothedMoments<Model::kStateDim>>* moments) {
   using StateCov = Mat<Model::kStateDim, Model::kStateDim>;
   FilterSummary& s = out->summary;
   auto forward = std::make_shared<FilterSummary>(s);
@@ -243,7 +258,7 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
   s.forward = forward;
   if (records->empty()) return;
   std::string why;
-  if (!smoother->Smooth(layout.lag_one, &why)) {
+  if (!smoother->Smooth(layout.lag_one || moments != nullptr, &why)) {
     s.ok = false;
     s.status = "smoother failed";
     s.message = "smoother " + s.filter + ": " + why + "; no smoothed rows written";
@@ -255,12 +270,24 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
     r.x = smoother->mean(r.step);
     r.P = smoother->cov(r.step);
   }
+  if (moments != nullptr) {
+    moments->clear();
+    moments->reserve(records->size());
+    for (const auto& r : *records) {
+      const StateCov* L = smoother->lag_one(r.step);
+      moments->push_back({r.x, r.P,
+                          L ? *L : StateCov::Constant(std::numeric_limits<double>::quiet_NaN())});
+    }
+  }
   EmitRows<Model, Meas>(
       *records, data, layout, [&](size_t k) { return smoother->lag_one(k); }, &out->rows, &s);
 }
 
+// With spec.smooth and moments, also the smoothed rows as typed moments
+// (SmoothedMoments; left empty when the run or the smoother fails).
 template <class Model, class Meas>
-FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
+FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
+                              std::vector<SmoothedMoments<Model::kStateDim>>* moments = nullptr) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   using StateCov = Mat<N, N>;
@@ -378,7 +405,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data) {
     EmitRows<Model, Meas>(records, data, layout, no_lag_one, &out.rows, &s);
   } else {
     timing(&s);  // the forward pass's, copied into s.forward
-    SmoothRecords<Model, Meas>(data, layout, &*smoother, &records, &out);
+    SmoothRecords<Model, Meas>(data, layout, &*smoother, &records, &out, moments);
   }
   timing(&s);
   return out;

@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "adaptive/tuner.h"
@@ -151,6 +153,62 @@ TEST(EmPendulum, ApproximateEStepLowersTheNllAndReportsTheMlOptimumBeside) {
   ASSERT_TRUE(std::isfinite(e.nll_ml_from_em));
   EXPECT_LE(e.nll_ml_from_em, e.nll_tuned + 1e-9);
   EXPECT_NEAR(e.r[0], 0.01, 0.003);  // R is well identified
+}
+
+// EM's E-step reads the smoother's typed moments (SmoothedMoments), no row
+// columns: they are the numbers `estlab smooth --full-cov` writes, column by
+// column, for the ERTS and the sigma-point RTS, on a record with a skipped
+// measurement; the last row's lag-one is NaN.
+TEST(EmMoments, TypedMomentsAreTheSmoothFullCovColumns) {
+  using P = models::Pendulum;
+  std::vector<FilterData> data = {
+      Simulate<P, P::Sin>(Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), 0.01, 200,
+                          Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 9)};
+  data[0].z[50] = std::numeric_limits<double>::quiet_NaN();  // a skipped sample
+  for (const FilterKindOptions& kind : {FilterKindOptions{EkfOptions{}},
+                                        FilterKindOptions{DefaultFilterOptions(FilterKind::kUkf)}}) {
+    FilterSpec spec;
+    spec.measurement = "sin";
+    spec.filter = kind;
+    spec.transition.integrator = Integrator::kRk4;
+    spec.x0 = {testing::kPi / 4, 0.0};
+    spec.p0 = {1e-4, 0.0, 0.0, 1e-4};
+    spec.q = {1e-6, 0.0, 0.0, 1e-4};
+    spec.r = {0.01};
+    spec.smooth = true;
+    std::vector<SmoothedMoments<2>> moments;
+    const FilterRunOutput typed = RunFilterWith<P, P::Sin>(spec, data[0], &moments);
+    spec.full_cov = true;
+    const FilterRunOutput columns = RunFilterWith<P, P::Sin>(spec, data[0]);
+    ASSERT_TRUE(typed.summary.ok) << typed.summary.message;
+    ASSERT_EQ(moments.size(), columns.rows.size());
+    auto col = [&](const std::string& name) {
+      return size_t(std::find(columns.columns.begin(), columns.columns.end(), name) -
+                    columns.columns.begin());
+    };
+    const size_t x0 = col("theta_est"), x1 = col("omega_est"), v0 = col("theta_var"),
+                 v1 = col("omega_var"), c01 = col("cov_theta_omega"), l00 = col("lag1_theta_theta"),
+                 l01 = col("lag1_theta_omega"), l10 = col("lag1_omega_theta"),
+                 l11 = col("lag1_omega_omega");
+    ASSERT_LT(l11, columns.columns.size());
+    for (size_t k = 0; k < moments.size(); ++k) {
+      const std::vector<double>& r = columns.rows[k];
+      const SmoothedMoments<2>& m = moments[k];
+      EXPECT_EQ(m.x(0), r[x0]) << k;
+      EXPECT_EQ(m.x(1), r[x1]) << k;
+      EXPECT_EQ(m.P(0, 0), r[v0]) << k;
+      EXPECT_EQ(m.P(1, 1), r[v1]) << k;
+      EXPECT_EQ(m.P(0, 1), r[c01]) << k;
+      if (k + 1 < moments.size()) {
+        EXPECT_EQ(m.lag_one(0, 0), r[l00]) << k;
+        EXPECT_EQ(m.lag_one(0, 1), r[l01]) << k;
+        EXPECT_EQ(m.lag_one(1, 0), r[l10]) << k;
+        EXPECT_EQ(m.lag_one(1, 1), r[l11]) << k;
+      } else {
+        EXPECT_TRUE(std::isnan(m.lag_one(0, 0)) && std::isnan(r[l00]));
+      }
+    }
+  }
 }
 
 TEST(EmInput, OptionsEmDoesNotTakeAreRefused) {
