@@ -144,8 +144,10 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
     if (!unidentified[i] && cov(i, i) > 0) r.std_errors[i] = std::sqrt(cov(i, i));
   for (int i = 0; i < k; ++i) {
     for (int l = 0; l < k; ++l) {
-      if (std::isfinite(r.std_errors[i]) && std::isfinite(r.std_errors[l]))
-        r.correlation[size_t(i) * k + l] = cov(i, l) / (r.std_errors[i] * r.std_errors[l]);
+      if (!std::isfinite(r.std_errors[i]) || !std::isfinite(r.std_errors[l])) continue;
+      // The diagonal is 1 by definition, not cov_ii / sqrt(cov_ii)^2 rounded.
+      r.correlation[size_t(i) * k + l] =
+          i == l ? 1.0 : cov(i, l) / (r.std_errors[i] * r.std_errors[l]);
     }
   }
   return r;

@@ -328,16 +328,31 @@ std::vector<double> FreeSimulationRmse(const ModelEntry& model, const FilterSpec
   return Rmse(e, m);
 }
 
+FreeSimulation WholeRecordSimulation(const ModelEntry& model, const FilterSpec& spec,
+                                     const FilterData& data, const std::vector<double>& x0) {
+  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+  const size_t rows = data.t.size();
+  FreeSimulation sim;
+  const SimulationResult r = SimulateRows(model, spec, data, 0, rows, x0);
+  if (!r.ok || r.rows.size() < rows) {
+    sim.why = "the simulation from " + data.path + " row 0 (t = " +
+              FormatNumber(rows ? data.t[0] : 0.0) + ") failed: " + r.error;
+    return sim;
+  }
+  const size_t m = meas.outputs.size(), first_z = r.columns.size() - m;
+  for (size_t k = 0; k < rows; ++k)
+    for (size_t j = 0; j < m; ++j) sim.y.push_back(r.rows[k][first_z + j]);
+  AppendErrors(meas, data, r, 0, rows, 0, &sim.e);
+  sim.ok = !sim.e.empty();
+  if (sim.ok) sim.rmse = Rmse(sim.e, int(m));
+  return sim;
+}
+
 std::vector<double> WholeRecordRmse(const ModelEntry& model, const FilterSpec& spec,
                                     const FilterData& data, const std::vector<double>& x0) {
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
-  std::vector<double> e;
-  long windows = 0;
-  std::string why;
-  if (!RunErrors(model, spec, data, {.windows = false, .x0 = x0}, 0.0, &e, &windows, &why) ||
-      e.empty())
-    return std::vector<double>(m, std::nan(""));
-  return Rmse(e, m);
+  const FreeSimulation sim = WholeRecordSimulation(model, spec, data, x0);
+  return sim.ok ? sim.rmse : std::vector<double>(m, std::nan(""));
 }
 
 OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec,

@@ -32,6 +32,7 @@
 //   OutputErrorResult r = FitOutputError(model, spec, estimate, runs, {.horizon = 0.5});
 //   std::vector<double> rmse = FreeSimulationRmse(model, r.fitted_spec, validation, 0.5);
 //   std::vector<double> whole = WholeRecordRmse(model, r.fitted_spec, validation, x0);
+//   FreeSimulation sim = WholeRecordSimulation(model, r.fitted_spec, validation, x0);  // y, e
 #ifndef ESTLAB_STUDIES_OUTPUT_ERROR_H_
 #define ESTLAB_STUDIES_OUTPUT_ERROR_H_
 
@@ -96,8 +97,21 @@ bool EvenlySampled(const FilterData& d);
 std::vector<double> FreeSimulationRmse(const ModelEntry& model, const FilterSpec& spec,
                                        const FilterData& data, double horizon);
 
-// RMSE per output of the free simulation of `spec` over the whole record
-// from x0 at its first row; NaN when the simulation fails.
+// The free simulation of `spec` over the whole record from x0 at its first
+// row (one simulation, the input held as everywhere): the simulated outputs
+// y and the errors e = wrap(z - y) (0 where z is missing), rows x outputs,
+// outputs fastest, and the RMSE per output (over every row, a missing z
+// counting 0). ok false, with why, when the simulation fails.
+struct FreeSimulation {
+  bool ok = false;
+  std::string why;
+  std::vector<double> y, e, rmse;
+};
+FreeSimulation WholeRecordSimulation(const ModelEntry& model, const FilterSpec& spec,
+                                     const FilterData& data, const std::vector<double>& x0);
+
+// RMSE per output of WholeRecordSimulation's errors; NaN when the
+// simulation fails.
 std::vector<double> WholeRecordRmse(const ModelEntry& model, const FilterSpec& spec,
                                     const FilterData& data, const std::vector<double>& x0);
 

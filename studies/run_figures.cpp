@@ -265,6 +265,43 @@ void ConvergenceFigure(const RunContext& c) {
 
 }  // namespace
 
+// Per output two panels: z (points) with the free simulation y (line), then
+// the errors e = z - y with their RMSE. Columns: t, then z, y, e per output.
+void FreeSimulationFigure(const RunContext& c) {
+  const RunFigureInput& in = c.in;
+  const size_t m = c.outputs.size(), rows = in.meas_t.size();
+  GnuplotFigure fig(c.folder, "free-simulation");
+  fig.dat() << "# t";
+  for (const auto& o : c.outputs) fig.dat() << " z_" << o << " sim_" << o << " err_" << o;
+  fig.dat() << "\n";
+  for (size_t k = 0; k < rows; ++k) {
+    fig.dat() << Dat(in.meas_t[k]);
+    for (size_t j = 0; j < m; ++j) {
+      const double z = in.meas_z[k * m + j];
+      fig.dat() << " " << Dat(z) << " " << Dat(in.sim_y[k * m + j]) << " "
+                << Dat(std::isfinite(z) ? in.sim_e[k * m + j] : kNan);
+    }
+    fig.dat() << "\n";
+  }
+  auto& b = fig.body();
+  b << "  set multiplot layout " << 2 * m << ",1 title " << GnuplotText(in.sim_title) << "\n"
+    << "  set lmargin at screen 0.10\n  set rmargin at screen 0.68\n";  // panels aligned
+  for (size_t j = 0; j < m; ++j) {
+    const size_t c0 = 2 + 3 * j;
+    const std::string rmse = j < in.sim_rmse.size() ? FormatNumber(in.sim_rmse[j]) : "-";
+    b << "  set ylabel " << GnuplotText(c.outputs[j]) << "\n"
+      << XLabel(false) << "  plot " << GnuplotQuote(fig.dat_name()) << " using 1:" << c0
+      << " with points pt 7 ps 0.3 lc rgb '#7f7f7f' title 'measured', \\\n       '' using 1:"
+      << c0 + 1 << " with lines lw 1.5 lc rgb '#1f77b4' title 'free simulation'\n"
+      << "  set ylabel " << GnuplotText("z - y " + c.outputs[j]) << "\n"
+      << XLabel(j + 1 == m) << "  plot " << GnuplotQuote(fig.dat_name()) << " using 1:" << c0 + 2
+      << " with lines lc rgb '#d62728' title " << GnuplotText("error, RMSE " + rmse)
+      << ", 0 with lines lc rgb 'black' notitle\n";
+  }
+  b << "  unset multiplot\n";
+  c.scripts->push_back(fig.Write(c.term, 900, 220 * int(2 * m) + 60));
+}
+
 std::vector<double> Autocorrelation(const std::vector<double>& e, int max_lag) {
   std::vector<double> x;
   for (double v : e)
@@ -318,6 +355,13 @@ FiguresSummary DrawRunFigures(const RunFigureInput& in, const std::string& dir,
     AutocorrelationFigure(c);
   }
   if (!in.objective_history.empty()) ConvergenceFigure(c);
+  if (!in.sim_y.empty()) {
+    const size_t cells = in.meas_t.size() * c.outputs.size();
+    if (in.sim_y.size() != cells || in.sim_e.size() != cells || in.meas_z.size() != cells)
+      throw InputError("the free simulation has " + std::to_string(in.sim_y.size()) +
+                       " values for " + std::to_string(cells) + " measurements");
+    FreeSimulationFigure(c);
+  }
   RenderFigures(options, &out);
   return out;
 }

@@ -15,6 +15,9 @@
 //                    per output, lags 1..L, with the white-noise 95 % band
 //                    +-1.96 / sqrt(K) (K updates)
 //   convergence      the tuner's objective by iteration (when given)
+//   free-simulation  per output the measurements with the free simulation
+//                    (no filter, no noise) and below them the errors
+//                    z - y with their RMSE (when given: tune --plot)
 //
 // Usage:
 //   RunFigureInput in;
@@ -48,6 +51,12 @@ struct RunFigureInput {
   // convergence figure when not empty).
   std::vector<double> objective_history;
   std::string objective_name = "NLL";
+  // The free simulation of the outputs at meas_t and its errors, rows x
+  // outputs (output_error.h's WholeRecordSimulation), with its RMSE per
+  // output and its title ("two-tanks: free simulation on v.csv from x0 =
+  // (...)"): the free-simulation figure when sim_y is not empty.
+  std::vector<double> sim_y, sim_e, sim_rmse;
+  std::string sim_title;
 };
 
 // The lag-1..max_lag autocorrelations rho_l = c_l / c_0 of the finite values

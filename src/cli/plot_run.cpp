@@ -19,6 +19,12 @@ bool PlotRun(const ModelEntry& model, const MeasurementDesc& meas, const FilterD
   in.meas_z = data.z;
   in.objective_history = request.history;
   in.objective_name = request.objective;
+  if (request.simulation != nullptr) {
+    in.sim_y = request.simulation->y;
+    in.sim_e = request.simulation->e;
+    in.sim_rmse = request.simulation->rmse;
+    in.sim_title = model.name + ": " + request.sim_what;
+  }
   const FiguresSummary f = DrawRunFigures(in, request.dir, FiguresOptions{});
   if (!request.json)
     std::cout << "figures         " << f.scripts.size() << " in " << request.dir

@@ -12,6 +12,7 @@
 
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
+#include "studies/output_error.h"
 
 namespace estlab::cli {
 
@@ -21,6 +22,11 @@ struct PlotRequest {
   std::vector<double> history = {};  // the tuner's objective from its start point (or empty)
   std::string objective = "NLL";
   bool json = false;  // --json: nothing on stdout
+  // tune --plot: the free simulation on the same data (free-simulation
+  // figure) and its title after the model's name ("free simulation on
+  // v.csv from x0 = (h1 = 0.1, ...)").
+  const FreeSimulation* simulation = nullptr;
+  std::string sim_what = {};
 };
 
 // Draws the figures and prints "figures  N in DIR (png via T, svg)"; false,

@@ -177,7 +177,9 @@ Progress: on a terminal, stderr shows one line per optimiser iteration
 piped or redirected it is silent, and stdout holds only the report (--json:
 only the JSON). --plot DIR draws the tuned filter on the first --validate
 file (else the first --data file) as 'estlab filter --plot' does, plus the
-tuner's objective by iteration (convergence).
+tuner's objective by iteration (convergence) and the tuned model's free
+simulation on that file with its errors (free-simulation: no filter, from the
+run's prior mean, as the validation's whole-file RMSE).
 )";
 
 // --init-q-scalar s -> init-q-diag "s,s,..." in the settings (the user's own
@@ -515,7 +517,8 @@ struct ProgressLog {
 
 // `tune --plot DIR`: the tuned filter run on the first --validate file (else
 // the first --data file), drawn as 'estlab filter --plot' draws it, with the
-// tuner's convergence. False when the figures could not be rendered.
+// tuner's convergence and the free simulation of the tuned model on that
+// file. False when the figures could not be rendered.
 bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const FilterSpec& tuned,
                const std::vector<double>& history, const std::string& objective) {
   const std::string path = vm.count("validate")
@@ -526,12 +529,25 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
       LoadFilterData(path, model, meas, ParseColumnRenames(vm), ResolveTruth(vm, path, model).read,
                      ConstantInputGiven(vm));
   const FilterRunOutput run = model.run_filter(tuned, data);
-  const PlotRequest plot{.dir = vm["plot"].as<std::string>(),
-                         .what = "tuned " + run.summary.filter + " on " +
-                                 std::filesystem::path(path).filename().string(),
-                         .history = history,
-                         .objective = objective,
-                         .json = vm.count("json") > 0};
+  PlotRequest plot{.dir = vm["plot"].as<std::string>(),
+                   .what = "tuned " + run.summary.filter + " on " +
+                           std::filesystem::path(path).filename().string(),
+                   .history = history,
+                   .objective = objective,
+                   .json = vm.count("json") > 0};
+  // The free simulation from the run's prior mean, as the validation's
+  // whole-file RMSE starts it (tune_validate.cpp).
+  FreeSimulation sim;
+  if (run.summary.x0.size() == model.states.size()) {
+    sim = WholeRecordSimulation(model, tuned, data, run.summary.x0);
+    plot.simulation = sim.ok ? &sim : nullptr;
+    plot.sim_what = "free simulation on " + std::filesystem::path(path).filename().string() +
+                    " from x0 = (";
+    for (size_t i = 0; i < model.states.size(); ++i)
+      plot.sim_what += (i ? ", " : "") + model.states[i] + " = " + FormatNumber(run.summary.x0[i]);
+    plot.sim_what += ")";
+    if (!sim.ok) std::cerr << "estlab: note: no free-simulation figure: " << sim.why << "\n";
+  }
   return PlotRun(model, meas, data, run, plot);
 }
 

@@ -21,6 +21,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -534,6 +535,51 @@ TEST(BoundedLbfgs, RosenbrockFromALowerBoundThatMustMove) {
   EXPECT_NEAR(x[0], 1.0, 1e-5);
   EXPECT_NEAR(x[1], 1.0, 1e-5);
   EXPECT_LE(s.final_cost, s.initial_cost);
+}
+
+TEST(BoundedLbfgs, StepsOnAQuadraticMeetTheCurvatureCondition) {
+  // f = 1/2 sum_i h_i x_i^2, h from 1 to 1e5 (no bounds). Along a step s the
+  // slope is linear, so the line search's secant lands on the minimum along
+  // s; every accepted step must leave at most c2 = 0.5 of the slope it
+  // started with: s^T g(x_k+1) <= 0.5 s^T g(x_k) (Wolfe's curvature
+  // condition, bounded_lbfgs.h step 4). Armijo backtracking alone leaves
+  // ratios near 1 on the first, steepest-descent steps.
+  const std::vector<double> h = {1.0, 10.0, 1e2, 1e3, 1e4, 1e5};
+  const size_t n = h.size();
+  auto gradient = [&](const std::vector<double>& x) {
+    std::vector<double> g(n);
+    for (size_t i = 0; i < n; ++i) g[i] = h[i] * x[i];
+    return g;
+  };
+  auto f = [&](const double* x, double* v, double* g) {
+    *v = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      *v += 0.5 * h[i] * x[i] * x[i];
+      if (g) g[i] = h[i] * x[i];
+    }
+    return true;
+  };
+  std::vector<double> x(n, 1.0), previous = x;
+  std::vector<double> ratios;
+  auto callback = [&](int, const std::vector<double>& now, double, double) {
+    const std::vector<double> g0 = gradient(previous), g1 = gradient(now);
+    double slope0 = 0.0, slope1 = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      slope0 += g0[i] * (now[i] - previous[i]);
+      slope1 += g1[i] * (now[i] - previous[i]);
+    }
+    ratios.push_back(slope1 / slope0);
+    previous = now;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  BoundedLbfgsOptions o;
+  o.gradient_tolerance = 1e-10;
+  const BoundedLbfgsSummary s = MinimizeBounded(f, std::vector<double>(n, -inf),
+                                                std::vector<double>(n, inf), o, &x, callback);
+  EXPECT_TRUE(s.converged) << s.message;
+  ASSERT_FALSE(ratios.empty());
+  for (size_t k = 0; k < ratios.size(); ++k) EXPECT_LE(ratios[k], 0.5 + 1e-9) << "step " << k + 1;
+  for (size_t i = 0; i < n; ++i) EXPECT_NEAR(x[i], 0.0, 1e-9) << i;
 }
 
 TEST(TuneVerdictRules, WorseThanStartAndAtBoundAreFailures) {

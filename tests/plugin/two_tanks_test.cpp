@@ -45,6 +45,27 @@ double JsonNumber(const std::string& json, const std::string& section, const std
 const char* kTrue[] = {"k", "a1", "a2"};
 const double kTrueValue[] = {0.004, 0.03, 0.025};
 
+// --plot's free-simulation figure: its four files, every error column equal
+// to z - y, and the RMSE of the errors equal to the validation's whole-file
+// RMSE (recomputed here from the numbers the figure draws).
+void ExpectFreeSimulationFigure(const TempDir& dir, double whole_rmse) {
+  for (const char* ext : {".png", ".svg", ".gp", ".dat"})
+    EXPECT_TRUE(dir.Exists(std::string("plots/free-simulation") + ext)) << ext;
+  const std::vector<std::string> lines = SplitLines(ReadFile(dir.File("plots/free-simulation.dat")));
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "# t z_h2 sim_h2 err_h2");
+  double sum = 0.0;
+  size_t rows = 0;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    double t, z, y, e;
+    ASSERT_EQ(std::sscanf(lines[i].c_str(), "%lf %lf %lf %lf", &t, &z, &y, &e), 4) << lines[i];
+    EXPECT_NEAR(e, z - y, 1e-15) << lines[i];
+    sum += e * e, ++rows;
+  }
+  EXPECT_EQ(rows, 500u);
+  EXPECT_NEAR(std::sqrt(sum / double(rows)), whole_rmse, 1e-9 * whole_rmse);
+}
+
 TEST(TwoTanks, ReadmeWalkthroughFitsAndValidatesNearTheNoiseFreeFloor) {
   const std::vector<std::string> commands =
       MarkdownCommands("examples/two_tanks/README.md", "## Walkthrough");
@@ -76,6 +97,7 @@ TEST(TwoTanks, ReadmeWalkthroughFitsAndValidatesNearTheNoiseFreeFloor) {
     EXPECT_GT(floor, 0.0);
     std::printf("  validation free-simulation RMSE %.4g m, noise-free floor %.4g m (x%.3f)\n",
                 tuned, floor, tuned / floor);
+    ExpectFreeSimulationFigure(dir, tuned);
   }
   const std::string fitted = ReadFile(dir.path() + "/fitted_valid.csv");
   EXPECT_EQ(fitted.rfind("t,h1,h2,u,z_h2\n", 0), 0u) << fitted.substr(0, 80);
