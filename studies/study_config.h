@@ -41,7 +41,11 @@
 //   measure-at-t0 = false            # true: also a measurement at t = 0
 //   prior-x0 = theta=0.785398        # filter prior mean (default: x0)
 //   prior-p0-diag = 0.1,0.1          # or prior-p0 = a,b;c,d (default I)
-//   input = 0                        # constant input (models with an input)
+//   input = 0                        # constant input (models with an input), or a
+//                                    #   seeded signal sampled at the output times:
+//                                    #   multisine(rms=, mean=, band=f1:f2, sines=, seed=)
+//                                    #   | prbs(amplitude=, mean=, period=, order=, seed=)
+//                                    #   | steps(u0, t1:u1, ...)  (src/sim/input_signal.h)
 //
 //   # Recorded runs instead of simulated ones (docs/studies.md "Recorded data"):
 //   data = ../examples/data/multiarm/single/validate_*.csv   # glob or a, b list,

@@ -10,6 +10,8 @@
 #include "src/core/white_accel.h"
 #include "src/options/filter_flags.h"
 #include "src/registry/model_plugin.h"
+#include "src/sim/input_signal.h"
+#include "src/sim/simulator_impl.h"
 #include "studies/study_config_parts.h"
 
 namespace estlab {
@@ -27,6 +29,38 @@ std::vector<double> WhiteAccelCovariance(const ModelEntry& model, double qc, dou
 namespace study_config {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// `input = 2.5 | multisine(...) | prbs(...) | steps(...)` (src/sim/
+// input_signal.h). A signal is sampled at the scenario's output times t_k =
+// k dt into the truth's schedule; the interval before the first measurement
+// holds the first measurement's sample (measure-at-t0 = false), as a filter
+// whose prior is at t = 0 holds the first row's input (src/run/step_loop.h).
+void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigErrors& err,
+                      bool recorded, ScenarioConfig* sc) {
+  const ModelEntry& model = *sc->model;
+  const InputSignal signal =
+      Checked(value, err, [](const std::string& t) { return ParseInputSignal(t, "input"); });
+  if (signal.kind == InputSignal::kConstant) {
+    sc->truth.input = signal.mean;
+    if (signal.mean != 0 && !model.has_input)
+      v.Fail("input", "model '" + model.name + "' has no input");
+    return;
+  }
+  if (!model.has_input) v.Fail("input", "model '" + model.name + "' has no input");
+  if (recorded)
+    v.Fail("input", "a signal applies to simulated runs; recorded data carry their input column");
+  SimulationSpec& truth = sc->truth;
+  truth.times = OutputTimes(truth);  // k dt, as without a signal
+  for (size_t k = 0; k < truth.times.size(); ++k) {
+    const size_t sample = (k == 0 && !sc->measure_at_t0 && truth.times.size() > 1) ? 1 : k;
+    truth.inputs.push_back(signal.At(truth.times[sample]));
+  }
+  sc->truth_description += ", input " + Trim(value.text);
+}
+
+}  // namespace
 
 ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   ScenarioConfig sc;
@@ -210,12 +244,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   if (v.Has("measure-at-t0"))
     sc.measure_at_t0 = Checked(*get("measure-at-t0"), err,
                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
-  if (v.Has("input")) {
-    truth.input =
-        Checked(*get("input"), err, [](const std::string& t) { return ParseNumber(t, "input"); });
-    if (truth.input != 0 && !model.has_input)
-      v.Fail("input", "model '" + model.name + "' has no input");
-  }
+  if (v.Has("input")) SetScenarioInput(v, *get("input"), err, recorded, &sc);
 
   if (recorded) ReadRecordedData(v, &sc);
 

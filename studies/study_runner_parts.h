@@ -24,7 +24,8 @@ std::string Sig10(double v);
 std::vector<double> SampleX0(const ScenarioConfig& sc, uint64_t run_seed);
 
 // The measurements (and truth) of a simulated trajectory, as a filter reads
-// them. With meas-noise = poisson the simulator drew no measurement noise and
+// them, with the scenario's input signal when it has one (the sample held
+// from each row on). With meas-noise = poisson the simulator drew no measurement noise and
 // the counts are added here from their own stream DeriveSeed({seed, "pois"}).
 FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth,
                          const std::string& label, uint64_t seed);

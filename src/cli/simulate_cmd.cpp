@@ -13,6 +13,8 @@
 #include "src/io/output_file.h"
 #include "src/options/filter_flags.h"
 #include "src/registry/registry.h"
+#include "src/sim/input_signal.h"
+#include "src/sim/simulator_impl.h"
 
 namespace po = boost::program_options;
 
@@ -34,6 +36,10 @@ constexpr const char* kExamples = R"(Examples:
   # (column 'volts' as the model's input u), noisy and noise-free outputs:
   estlab simulate --model two-tanks.model --data pump.csv --column u=volts \
       --x0 h1=0.1,h2=0.05 --measure level --meas-noise-var 1e-6 --out sim.csv
+  # A cart-pole pushed by a PRBS force (+-2 N, a new bit every 0.2 s), the
+  # force written as column u:
+  estlab simulate --model cart-pole --input 'prbs(amplitude=2, period=0.2, order=7)' \
+      --t-end 10 --dt 0.02 --measure x-theta --meas-noise-var 1e-4,1e-4 --out cart.csv
 
 Output: CSV with columns t,<states>[,z_<outputs>], one row per output time from
 t = 0, values in %.17g; a sidecar <out>.json records model, parameters,
@@ -57,7 +63,7 @@ std::string PartialPath(const std::string& out) {
 
 std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
                         const std::string& integrator_name, const std::string& method,
-                        const std::string& data_path) {
+                        const std::string& data_path, const std::string& input_text) {
   JsonWriter j;
   j.BeginObject();
   j.Key("estlab_version").Value(ESTLAB_VERSION).Key("git_commit").Value(ESTLAB_GIT_COMMIT);
@@ -68,7 +74,7 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   j.EndObject();
   j.Key("states").Value(model.states);
   j.Key("x0").Value(spec.x0);
-  if (spec.times.empty()) {
+  if (data_path.empty()) {  // k dt (with or without an input signal)
     j.Key("t_end").Value(spec.t_end).Key("dt").Value(spec.dt);
   } else {
     j.Key("data").Value(data_path).Key("t0").Value(spec.times.front());
@@ -84,6 +90,8 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   }
   if (spec.inputs.empty())
     j.Key("input").Value(spec.input);
+  else if (data_path.empty())
+    j.Key("input").Value(input_text + ", sampled at the output times, zero-order hold");
   else
     j.Key("input").Value("recorded, zero-order hold");
   j.Key("process_noise_var").Value(spec.process_noise_var);
@@ -131,6 +139,22 @@ std::vector<std::pair<std::string, double>> ConfigParams(
   return out;
 }
 
+// --input: a constant, or a seeded signal (src/sim/input_signal.h) sampled
+// at the output times k dt, held to the next and written as the input's
+// column after the states.
+void SetInput(const po::variables_map& vm, const ModelEntry& model, SimulationSpec* spec) {
+  const InputSignal signal = ParseInputSignal(vm["input"].as<std::string>(), "--input");
+  if ((signal.kind != InputSignal::kConstant || signal.mean != 0) && !model.has_input)
+    throw InputError("--input: model '" + model.name + "' has no input");
+  if (signal.kind == InputSignal::kConstant) {
+    spec->input = signal.mean;
+    return;
+  }
+  spec->times = OutputTimes(*spec);
+  for (double t : spec->times) spec->inputs.push_back(signal.At(t));
+  spec->input_column = model.input_name;
+}
+
 // --data FILE: the output times and (for a model with an input) the input
 // schedule from FILE; --t-end and --dt then do not apply.
 void UseRecordedSchedule(const po::variables_map& vm, const ModelEntry& model,
@@ -170,7 +194,9 @@ int RunSimulate(const std::vector<std::string>& args) {
       "substeps", po::value<int>()->default_value(1),
       "fixed-step integrators: steps per output step")(
       "input", po::value<std::string>()->default_value("0"),
-      "constant input (cart-pole force F, dipc force u)")(
+      "the input (cart-pole force F, dipc force u): a constant, or a seeded signal sampled "
+      "at the output times and held to the next: multisine(rms=, mean=, band=f1:f2, sines=, "
+      "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...)")(
       "process-noise-var", po::value<std::string>(),
       "per-state variances of the noise added after each step")(
       "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
@@ -239,10 +265,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   spec.transition.substeps = vm["substeps"].as<int>();
   std::string error;
   if (!spec.transition.IsValid(&error)) throw InputError(error);
-  spec.input = ParseNumber(vm["input"].as<std::string>(), "--input");
-  if (spec.input != 0 && !model.has_input) {
-    throw InputError("--input: model '" + model.name + "' has no input");
-  }
+  SetInput(vm, model, &spec);
   if (vm.count("process-noise-var")) {
     spec.process_noise_var =
         ParseList(vm["process-noise-var"].as<std::string>(), "--process-noise-var");
@@ -287,7 +310,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   WriteCsv(csv.stream(), result.columns, result.rows);
   sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
                                   method_name,
-                                  vm.count("data") ? vm["data"].as<std::string>() : "");
+                                  vm.count("data") ? vm["data"].as<std::string>() : "",
+                                  Trim(vm["input"].as<std::string>()));
   csv.Finish();  // both written before either is in place: both or neither
   sidecar.Finish();
   csv.Commit();
@@ -320,7 +344,7 @@ int RunSimulate(const std::vector<std::string>& args) {
               << (spec.transition.integrator == Integrator::kCvodes ? " (" + method_name + ")" : "")
               << "\n"
               << "output steps     " << result.steps
-              << (spec.times.empty() ? "  (t = 0 .. " + FormatNumber(spec.t_end) +
+              << (!vm.count("data") ? "  (t = 0 .. " + FormatNumber(spec.t_end) +
                                            ", dt = " + FormatNumber(spec.dt) + ")"
                                      : "  (the times of " + vm["data"].as<std::string>() + ")")
               << "\n"

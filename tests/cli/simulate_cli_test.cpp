@@ -5,10 +5,13 @@
 // the JSON sidecar carry what a study needs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
+#include "src/sim/input_signal.h"
 #include "tests/cli/cli_test_util.h"
 
 namespace estlab {
@@ -49,6 +52,13 @@ std::vector<BadInputCase> BadInputCases() {
       {"dt inf", kDp + "--dt inf", "inf"},
       {"negative meas variance", kDp + "--measure angles --meas-noise-var 0.1,-0.5", "-0.5"},
       {"negative process variance", kDp + "--process-noise-var 0,0,-0.25,0", "-0.25"},
+      {"input signal on a model without input",
+       "simulate --model pendulum --input 'steps(0, 1:2)' --out out.csv", "has no input"},
+      {"input signal missing key",
+       "simulate --model cart-pole --input 'prbs(period=2)' --out out.csv", "'amplitude='"},
+      {"input signal with --data",
+       "simulate --model cart-pole --input 'steps(0, 1:2)' --data nosuch.csv --out out.csv",
+       "--input does not apply"},
       {"unwritable output",
        "simulate --model double-pendulum --t-end 0.1 --out /nonexistent/dir/x.csv",
        "/nonexistent/dir/x.csv"},
@@ -177,6 +187,35 @@ TEST(SimulateCli, HeaderAndSidecar) {
   EXPECT_DOUBLE_EQ(proc[2], 1e-8);
   EXPECT_DOUBLE_EQ(proc[3], 1e-6);
   for (const auto& f : dir.Files()) EXPECT_EQ(f.find(".tmp."), std::string::npos) << f;
+}
+
+// --input with a signal: the force column after the states holds the
+// signal at each row's time (the definition, src/sim/input_signal.h), and the
+// sidecar names it.
+TEST(SimulateCli, InputSignalIsWrittenAsTheInputColumn) {
+  TempDir dir;
+  const std::string signal = "prbs(amplitude=2, period=0.2, order=7, seed=5)";
+  const auto r = RunEstlab("simulate --model cart-pole --input '" + signal +
+                               "' --t-end 2 --dt 0.02 --integrator rk4 --out cart.csv",
+                           dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = SplitLines(ReadFile(dir.File("cart.csv")));
+  ASSERT_EQ(lines.size(), 102u);  // header + t = 0, 0.02, ..., 2
+  EXPECT_EQ(lines[0], "t,x,v,theta,omega,u");
+  const InputSignal expected = ParseInputSignal(signal, "input");
+  double moved = 0.0;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const double t = std::stod(lines[i]);
+    const double u = std::stod(lines[i].substr(lines[i].rfind(',') + 1));
+    EXPECT_EQ(u, expected.At(t)) << lines[i];
+    moved = std::max(moved, std::abs(std::stod(lines[i].substr(lines[i].find(',') + 1))));
+  }
+  EXPECT_GT(moved, 1e-3);  // the force moved the cart
+  const std::string sidecar = ReadFile(dir.File("cart.csv.json"));
+  EXPECT_NE(sidecar.find("\"input\": \"" + signal + ", sampled at the output times"),
+            std::string::npos)
+      << sidecar;
+  EXPECT_NE(sidecar.find("\"dt\": 0.02"), std::string::npos) << sidecar;
 }
 
 TEST(SimulateCli, HelpVersionAndListExitZero) {

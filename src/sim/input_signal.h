@@ -1,0 +1,61 @@
+// Seeded input signals for simulated experiments: what a study scenario's
+// `input = ...` may be besides a constant (docs/studies.md, "Inputs").
+// Sampled at the measurement times; the simulation and every filter hold
+// each sample until the next (zero-order hold, src/sim/simulation.h).
+//
+//   2.5                            a constant
+//   multisine(rms=0.5, mean=2.5, band=0.001:0.05, sines=20, seed=1)
+//       u(t) = mean + rms sqrt(2/N) sum_i cos(2 pi f_i t + phi_i),
+//       N = sines frequencies f_i evenly spaced over the band (both ends
+//       included; one sine: the band's low end), phases phi_i uniform on
+//       [0, 2 pi) from the seed; the deviation's mean square over a whole
+//       common period is rms^2.
+//   prbs(amplitude=1, mean=0, period=2, order=10, seed=1)
+//       u(t) = mean +- amplitude by the bits b_j of the maximum-length
+//       sequence of a `order`-bit linear feedback shift register (length
+//       2^order - 1, then it repeats), each held `period` seconds:
+//       j = floor(t / period); the register starts from `seed` mod 2^order
+//       (0 is taken as 1).
+//   steps(2.5, 200:3, 500:2)
+//       the first value until the first time, then each value from its time
+//       on (times strictly increasing).
+//
+// Every key of multisine and prbs may be left out except rms and
+// amplitude; errors name the key and the signal as written.
+//
+// Usage:
+//   const InputSignal s = ParseInputSignal("prbs(amplitude=0.5, period=4)", "input");
+//   double u = s.At(12.0);
+#ifndef ESTLAB_SIM_INPUT_SIGNAL_H_
+#define ESTLAB_SIM_INPUT_SIGNAL_H_
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace estlab {
+
+struct InputSignal {
+  enum Kind { kConstant, kMultisine, kPrbs, kSteps };
+  Kind kind = kConstant;
+  double mean = 0.0;                  // constant: the value
+  double scale = 0.0;                 // multisine: rms; prbs: amplitude
+  std::vector<double> freqs, phases;  // multisine
+  double period = 1.0;                // prbs
+  std::vector<bool> bits;             // prbs: one period of the sequence
+  std::vector<std::pair<double, double>> steps;  // (time, value) after the first value
+
+  double At(double t) const;
+};
+
+// Throws InputError("<what>: ...") naming the key or argument at fault.
+InputSignal ParseInputSignal(const std::string& text, const std::string& what);
+
+// One period of the maximum-length sequence of an order-bit Fibonacci LFSR
+// (2 <= order <= 20) from the nonzero start state.
+std::vector<bool> MaximumLengthSequence(int order, uint32_t start);
+
+}  // namespace estlab
+
+#endif  // ESTLAB_SIM_INPUT_SIGNAL_H_
