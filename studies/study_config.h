@@ -45,7 +45,8 @@
 //                                    #   seeded signal sampled at the output times:
 //                                    #   multisine(rms=, mean=, band=f1:f2, sines=, seed=)
 //                                    #   | prbs(amplitude=, mean=, period=, order=, seed=)
-//                                    #   | steps(u0, t1:u1, ...)  (src/sim/input_signal.h)
+//                                    #   | steps(u0, t1:u1, ...) | file(FILE[, column])
+//                                    #   (src/sim/input_signal.h)
 //
 //   # Recorded runs instead of simulated ones (docs/studies.md "Recorded data"):
 //   data = ../examples/data/multiarm/single/validate_*.csv   # glob or a, b list,

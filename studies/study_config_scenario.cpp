@@ -40,8 +40,9 @@ namespace {
 void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigErrors& err,
                       bool recorded, ScenarioConfig* sc) {
   const ModelEntry& model = *sc->model;
-  const InputSignal signal =
-      Checked(value, err, [](const std::string& t) { return ParseInputSignal(t, "input"); });
+  const std::string base = fs::path(err.path()).parent_path().string();  // file(...) paths
+  const InputSignal signal = Checked(
+      value, err, [&](const std::string& t) { return ParseInputSignal(t, "input", base); });
   if (signal.kind == InputSignal::kConstant) {
     sc->truth.input = signal.mean;
     if (signal.mean != 0 && !model.has_input)
@@ -53,6 +54,8 @@ void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigEr
     v.Fail("input", "a signal applies to simulated runs; recorded data carry their input column");
   SimulationSpec& truth = sc->truth;
   truth.times = OutputTimes(truth);  // k dt, as without a signal
+  if (const std::string why = signal.Covers(truth.times.front(), truth.times.back()); !why.empty())
+    v.Fail("input", why);
   for (size_t k = 0; k < truth.times.size(); ++k) {
     const size_t sample = (k == 0 && !sc->measure_at_t0 && truth.times.size() > 1) ? 1 : k;
     truth.inputs.push_back(signal.At(truth.times[sample]));

@@ -151,6 +151,9 @@ void SetInput(const po::variables_map& vm, const ModelEntry& model, SimulationSp
     return;
   }
   spec->times = OutputTimes(*spec);
+  if (const std::string why = signal.Covers(spec->times.front(), spec->times.back());
+      !why.empty())
+    throw InputError("--input: " + why);
   for (double t : spec->times) spec->inputs.push_back(signal.At(t));
   spec->input_column = model.input_name;
 }
@@ -196,7 +199,8 @@ int RunSimulate(const std::vector<std::string>& args) {
       "input", po::value<std::string>()->default_value("0"),
       "the input (cart-pole force F, dipc force u): a constant, or a seeded signal sampled "
       "at the output times and held to the next: multisine(rms=, mean=, band=f1:f2, sines=, "
-      "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...)")(
+      "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...), "
+      "file(FILE[, column]) (FILE's t and u columns, held; --data replays FILE's own times)")(
       "process-noise-var", po::value<std::string>(),
       "per-state variances of the noise added after each step")(
       "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(

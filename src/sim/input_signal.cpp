@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <iterator>
 #include <map>
 #include <set>
 
 #include "src/core/parse.h"
 #include "src/core/random.h"
 #include "src/core/types.h"
+#include "src/io/csv_reader.h"
 
 namespace estlab {
 
@@ -148,6 +151,35 @@ InputSignal Steps(const std::vector<std::string>& args, const std::string& where
   return s;
 }
 
+// file(path[, column]): the rows of a recorded input.
+InputSignal Recorded(const std::vector<std::string>& args, const std::string& where,
+                     const std::string& base_dir) {
+  if (args.empty() || args.size() > 2 || args[0].empty())
+    throw InputError(where + ": expected file(path) or file(path, column)");
+  InputSignal s;
+  s.kind = InputSignal::kRecorded;
+  const std::filesystem::path path(args[0]);
+  s.path = path.is_absolute() || base_dir.empty() ? path.string()
+                                                  : (std::filesystem::path(base_dir) / path).string();
+  const CsvTable table = ReadCsv(s.path);
+  const std::string column = args.size() == 2 ? args[1] : "u";
+  const int t_col = table.ColumnIndex("t"), u_col = table.ColumnIndex(column);
+  if (t_col < 0 || u_col < 0)
+    throw InputError(where + ": " + s.path + " has no '" + (t_col < 0 ? "t" : column) +
+                     "' column");
+  for (size_t i = 0; i < table.rows.size(); ++i) {
+    const double t = table.rows[i][size_t(t_col)], u = table.rows[i][size_t(u_col)];
+    const std::string at = s.path + ":" + std::to_string(table.line_numbers[i]);
+    if (!std::isfinite(t) || !std::isfinite(u))
+      throw InputError(where + ": " + at + ": missing " + (std::isfinite(t) ? column : "t"));
+    if (!s.steps.empty() && !(t > s.steps.back().first))
+      throw InputError(where + ": " + at + ": t = " + FormatNumber(t) + " does not increase");
+    s.steps.emplace_back(t, u);
+  }
+  if (s.steps.empty()) throw InputError(where + ": " + s.path + " has no rows");
+  return s;
+}
+
 }  // namespace
 
 std::vector<bool> MaximumLengthSequence(int order, uint32_t start) {
@@ -181,17 +213,29 @@ double InputSignal::At(double t) const {
       const size_t index = size_t(std::fmod(std::max(j, 0.0), double(bits.size())));
       return mean + (bits[index] ? scale : -scale);
     }
-    case kSteps: {
-      double u = mean;
-      for (const auto& [time, value] : steps)
-        if (t >= time) u = value;
-      return u;
+    case kSteps:
+    case kRecorded: {  // the last (time, value) at or before t
+      const auto after = std::upper_bound(
+          steps.begin(), steps.end(), t,
+          [](double time, const std::pair<double, double>& step) { return time < step.first; });
+      if (after == steps.begin()) return kind == kSteps ? mean : steps.front().second;
+      return std::prev(after)->second;
     }
   }
   return mean;
 }
 
-InputSignal ParseInputSignal(const std::string& text, const std::string& what) {
+std::string InputSignal::Covers(double t_first, double t_last) const {
+  if (kind != kRecorded) return "";
+  if (t_first < steps.front().first || t_last > steps.back().first)
+    return "the input of " + path + " covers t = " + FormatNumber(steps.front().first) + " .. " +
+           FormatNumber(steps.back().first) + ", not " + FormatNumber(t_first) + " .. " +
+           FormatNumber(t_last);
+  return "";
+}
+
+InputSignal ParseInputSignal(const std::string& text, const std::string& what,
+                             const std::string& base_dir) {
   const std::string s = Trim(text);
   std::string name;
   std::vector<std::string> args;
@@ -204,8 +248,9 @@ InputSignal ParseInputSignal(const std::string& text, const std::string& what) {
   if (name == "multisine") return Multisine(args, where);
   if (name == "prbs") return Prbs(args, where);
   if (name == "steps") return Steps(args, where);
+  if (name == "file") return Recorded(args, where, base_dir);
   throw InputError(what + ": unknown signal '" + name +
-                   "' (expected a number, multisine(...), prbs(...) or steps(...))");
+                   "' (expected a number, multisine(...), prbs(...), steps(...) or file(...))");
 }
 
 }  // namespace estlab

@@ -19,12 +19,19 @@
 //   steps(2.5, 200:3, 500:2)
 //       the first value until the first time, then each value from its time
 //       on (times strictly increasing).
+//   file(pump.csv)  or  file(pump.csv, volts)
+//       a recorded input: the file's `t` column and its `u` column (or the
+//       one named), each value held until the next row's time; a relative
+//       path is relative to `base_dir`. Times must increase and values be
+//       finite (errors name file and line); sampling outside [first, last]
+//       row time is refused by Covers().
 //
 // Every key of multisine and prbs may be left out except rms and
 // amplitude; errors name the key and the signal as written.
 //
 // Usage:
 //   const InputSignal s = ParseInputSignal("prbs(amplitude=0.5, period=4)", "input");
+//   if (const std::string why = s.Covers(0, 100); !why.empty()) ...
 //   double u = s.At(12.0);
 #ifndef ESTLAB_SIM_INPUT_SIGNAL_H_
 #define ESTLAB_SIM_INPUT_SIGNAL_H_
@@ -37,20 +44,27 @@
 namespace estlab {
 
 struct InputSignal {
-  enum Kind { kConstant, kMultisine, kPrbs, kSteps };
+  enum Kind { kConstant, kMultisine, kPrbs, kSteps, kRecorded };
   Kind kind = kConstant;
   double mean = 0.0;                  // constant: the value
   double scale = 0.0;                 // multisine: rms; prbs: amplitude
   std::vector<double> freqs, phases;  // multisine
   double period = 1.0;                // prbs
   std::vector<bool> bits;             // prbs: one period of the sequence
-  std::vector<std::pair<double, double>> steps;  // (time, value) after the first value
+  std::vector<std::pair<double, double>> steps;  // (time, value) after the first value;
+                                                 // recorded: every row (time, value)
+  std::string path;                              // recorded: the file read
 
   double At(double t) const;
+  // "" when every time in [t_first, t_last] can be sampled, else why not
+  // (a recorded input that starts later or ends earlier).
+  std::string Covers(double t_first, double t_last) const;
 };
 
-// Throws InputError("<what>: ...") naming the key or argument at fault.
-InputSignal ParseInputSignal(const std::string& text, const std::string& what);
+// Throws InputError("<what>: ...") naming the key or argument at fault;
+// file(...) paths are relative to base_dir (the working folder when empty).
+InputSignal ParseInputSignal(const std::string& text, const std::string& what,
+                             const std::string& base_dir = "");
 
 // One period of the maximum-length sequence of an order-bit Fibonacci LFSR
 // (2 <= order <= 20) from the nonzero start state.

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -18,6 +20,19 @@ namespace estlab {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// Each (text, message): parsing text throws an InputError containing message.
+void ExpectErrors(const std::vector<std::pair<std::string, std::string>>& cases,
+                  const std::string& base_dir) {
+  for (const auto& [text, message] : cases) {
+    try {
+      ParseInputSignal(text, "input", base_dir);
+      ADD_FAILURE() << text << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << text << ": " << e.what();
+    }
+  }
+}
 
 TEST(InputSignal, MultisineHasItsMeanItsRmsAndOnlyItsBand) {
   // Five sines at 0.01 .. 0.05 Hz: 100 s is a common period; 2000 samples
@@ -93,6 +108,31 @@ TEST(InputSignal, StepsAndConstantsByHand) {
   EXPECT_EQ(c.At(3.0), 0.25);
 }
 
+// file(...): each row's value held until the next row's time; a relative
+// path is relative to the base folder; Covers refuses times outside the rows.
+TEST(InputSignal, RecordedFileIsHeldRowToRow) {
+  const std::string dir = ::testing::TempDir() + "/estlab_input_signal";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/pump.csv") << "t,volts,u\n0,1,9\n1.5,2,9\n4,3,9\n";
+  const InputSignal s = ParseInputSignal("file(pump.csv, volts)", "input", dir);
+  EXPECT_EQ(s.kind, InputSignal::kRecorded);
+  const std::vector<std::pair<double, double>> at = {
+      {0.0, 1.0}, {1.4999, 1.0}, {1.5, 2.0}, {3.9, 2.0}, {4.0, 3.0}};
+  for (const auto& [t, u] : at) EXPECT_EQ(s.At(t), u) << t;
+  EXPECT_EQ(s.Covers(0.0, 4.0), "");
+  EXPECT_NE(s.Covers(0.0, 4.5).find("covers t = 0 .. 4, not 0 .. 4.5"), std::string::npos)
+      << s.Covers(0.0, 4.5);
+  EXPECT_EQ(ParseInputSignal("file(" + dir + "/pump.csv)", "input").At(2.0), 9.0);  // column u
+  std::ofstream(dir + "/back.csv") << "t,u\n0,1\n2,2\n1,3\n";
+  std::ofstream(dir + "/hole.csv") << "t,u\n0,1\n1,\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"file(back.csv)", "back.csv:4: t = 1 does not increase"},
+      {"file(hole.csv)", "hole.csv:3: missing u"},
+      {"file(pump.csv, amps)", "pump.csv has no 'amps' column"},
+      {"file()", "expected file(path) or file(path, column)"}};
+  ExpectErrors(cases, dir);
+}
+
 TEST(InputSignal, ErrorsNameTheKey) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"prbs(period=2)", "input prbs(...): 'amplitude=' is required"},
@@ -106,14 +146,7 @@ TEST(InputSignal, ErrorsNameTheKey) {
       {"steps(1, 5)", "expected time:value, got '5'"},
       {"sine(1)", "input: unknown signal 'sine'"},
       {"2.5x", "input"}};
-  for (const auto& [text, message] : cases) {
-    try {
-      ParseInputSignal(text, "input");
-      ADD_FAILURE() << text << ": no error";
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << text << ": " << e.what();
-    }
-  }
+  ExpectErrors(cases, "");
 }
 
 }  // namespace

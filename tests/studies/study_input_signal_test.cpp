@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "error_text.h"
@@ -86,6 +88,28 @@ TEST(StudyInputSignal, AlternativesExpandIntoScenarios) {
   EXPECT_EQ(steps.truth.inputs[99], 0.0);   // t = 1.98
   EXPECT_EQ(steps.truth.inputs[100], 1.5);  // t = 2.00
   EXPECT_EQ(steps.truth.inputs[500], 1.5);
+}
+
+// input = file(...): relative to the config file's folder, sampled and held
+// like a signal; a record shorter than the runs is refused at the key.
+TEST(StudyInputSignal, RecordedInputFileRelativeToTheConfig) {
+  if (!testing::FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const std::string dir = ::testing::TempDir() + "/estlab_study_input";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/force.csv") << "t,F\n0,0\n3,1.5\n6,-1\n10,0\n";
+  const StudyConfig c =
+      ParseStudyConfig(CartStudy("cart-pole", "file(force.csv, F)"), dir + "/s.ini");
+  const ScenarioConfig& sc = c.scenarios[0];
+  ASSERT_EQ(sc.truth.inputs.size(), 501u);  // t = 0 .. 10
+  EXPECT_EQ(sc.truth.inputs[149], 0.0);     // t = 2.98
+  EXPECT_EQ(sc.truth.inputs[150], 1.5);     // t = 3.00
+  EXPECT_EQ(sc.truth.inputs[300], -1.0);    // t = 6.00
+  EXPECT_EQ(sc.truth.inputs[500], 0.0);     // t = 10
+  std::ofstream(dir + "/short.csv") << "t,u\n0,0\n5,1\n";
+  const std::string error = testing::ErrorText(
+      [&] { ParseStudyConfig(CartStudy("cart-pole", "file(short.csv)"), dir + "/s.ini"); });
+  EXPECT_NE(error.find("[scenario.cart] input: the input of"), std::string::npos) << error;
+  EXPECT_NE(error.find("covers t = 0 .. 5, not 0 .. 10"), std::string::npos) << error;
 }
 
 TEST(StudyInputSignal, ErrorsNameTheScenarioKey) {
