@@ -150,9 +150,10 @@ Trial Backtrack(const BoundedObjective& f, const State& st, const Vector& d, dou
     ++*evaluations;
     if (!f(trial.data(), &value, b == 0 ? t.g.data() : nullptr) || !std::isfinite(value)) continue;
     if (!(value <= st.f + o.sufficient_decrease * predicted && value < st.f)) continue;
-    if (b > 0) {
+    if (b > 0) {  // the accepted value is the one returned with the gradient, checked again
       ++*evaluations;
       if (!f(trial.data(), &value, t.g.data()) || !std::isfinite(value)) continue;
+      if (!(value <= st.f + o.sufficient_decrease * predicted && value < st.f)) continue;
     }
     t.accepted = true, t.clamped = clamped;
     t.x = trial, t.f = value, t.a = a;
@@ -172,7 +173,7 @@ void Extend(const BoundedObjective& f, const State& st, const Vector& d,
   const double slope0 = Dot(st.g, d);  // < 0
   for (int e = 0; e < kMaxExtensions; ++e) {
     const double slope = Dot(t->g, d);
-    if (t->clamped || slope >= kCurvature * slope0) return;
+    if (t->clamped || !std::isfinite(slope) || slope >= kCurvature * slope0) return;
     const double secant = t->a * slope0 / (slope0 - slope);  // zero of the linear slope model
     const double a = std::clamp(secant, 2.0 * t->a, 10.0 * t->a);
     bool clamped = false;

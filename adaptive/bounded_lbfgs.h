@@ -16,10 +16,10 @@
 //      `memory` pairs s = x_{k+1} - x_k, y = g_{k+1} - g_k, H_0 = gamma I,
 //      gamma = s^T y / y^T y), d_i = 0 on A; not a descent direction
 //      (g^T d >= 0): the memory is dropped and d = -g on the free set.
-//   4. Line search on x(a) = P(x_k + a d): the first a in 1, 1/2, ... with f(x(a)) <=
-//      f_k + c1 g^T (x(a) - x_k) (Armijo; a failed evaluation is rejected); where a = 1
+//   4. Line search on x(a) = P(x_k + a d): the first a in a0, a0/2, ... with f(x(a)) <=
+//      f_k + c1 g^T (x(a) - x_k) (Armijo; a failed evaluation is rejected); where a0
 //      passes inside the box but d^T g(x(a)) < c2 d^T g_k, c2 = 0.5 (Wolfe's curvature
-//      test fails: the step is short), a grows up to 8 times (bounded_lbfgs.cpp).
+//      test fails: the step is short), a grows up to 8 times (a0 = 1 with a memory).
 //   5. |f_k - f_{k+1}| <= function_tolerance |f_k|, or
 //      |x_{k+1} - x_k|_inf <= parameter_tolerance (|x_k|_inf + parameter_tolerance): converged.
 // The accepted values decrease monotonically, so the final point is never

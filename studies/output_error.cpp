@@ -333,10 +333,14 @@ FreeSimulation WholeRecordSimulation(const ModelEntry& model, const FilterSpec& 
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const size_t rows = data.t.size();
   FreeSimulation sim;
+  if (rows == 0) {
+    sim.why = data.path + " has no rows";
+    return sim;
+  }
   const SimulationResult r = SimulateRows(model, spec, data, 0, rows, x0);
   if (!r.ok || r.rows.size() < rows) {
-    sim.why = "the simulation from " + data.path + " row 0 (t = " +
-              FormatNumber(rows ? data.t[0] : 0.0) + ") failed: " + r.error;
+    sim.why = "the simulation from " + data.path + " row 0 (t = " + FormatNumber(data.t[0]) +
+              ") failed: " + r.error;
     return sim;
   }
   const size_t m = meas.outputs.size(), first_z = r.columns.size() - m;

@@ -12,12 +12,17 @@
 #include "src/core/random.h"
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
+#include "src/io/output_file.h"
 
 namespace estlab {
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// t moved forward by the slack within which a switching time counts as
+// reached (input_signal.h): 1e-9 relative, at least 1e-9 s.
+double Reached(double t) { return t + 1e-9 * std::max(1.0, std::abs(t)); }
 
 // The taps of a primitive polynomial per order (x^order + ... + 1), as bit
 // positions 1..order: a Galois register with these taps runs through all
@@ -111,8 +116,9 @@ InputSignal Multisine(const std::vector<std::string>& args, const std::string& w
     throw InputError(where + " band: expected f1:f2 in Hz, got '" + band->second + "'");
   const double f1 = ParseNumber(band->second.substr(0, colon), where + " band");
   const double f2 = ParseNumber(band->second.substr(colon + 1), where + " band");
-  if (!(f1 > 0 && f2 >= f1))
-    throw InputError(where + " band: expected 0 < f1 <= f2, got '" + band->second + "'");
+  if (!(f1 > 0 && (sines == 1 ? f2 >= f1 : f2 > f1)))
+    throw InputError(where + " band: expected 0 < f1 " + (sines == 1 ? "<=" : "<") +
+                     " f2, got '" + band->second + "'");
   Rng rng(DeriveSeed({uint64_t(seed), 0x6D756C7469ull}));  // "multi"
   for (int i = 0; i < sines; ++i) {
     s.freqs.push_back(sines == 1 ? f1 : f1 + (f2 - f1) * double(i) / double(sines - 1));
@@ -200,6 +206,7 @@ std::vector<bool> MaximumLengthSequence(int order, uint32_t start) {
 }
 
 double InputSignal::At(double t) const {
+  if (!std::isfinite(t)) return std::nan("");
   switch (kind) {
     case kConstant:
       return mean;
@@ -209,14 +216,14 @@ double InputSignal::At(double t) const {
       return mean + scale * std::sqrt(2.0 / double(freqs.size())) * sum;
     }
     case kPrbs: {
-      const double j = std::floor(t / period);
+      const double j = std::floor(Reached(t) / period);
       const size_t index = size_t(std::fmod(std::max(j, 0.0), double(bits.size())));
       return mean + (bits[index] ? scale : -scale);
     }
     case kSteps:
     case kRecorded: {  // the last (time, value) at or before t
       const auto after = std::upper_bound(
-          steps.begin(), steps.end(), t,
+          steps.begin(), steps.end(), Reached(t),
           [](double time, const std::pair<double, double>& step) { return time < step.first; });
       if (after == steps.begin()) return kind == kSteps ? mean : steps.front().second;
       return std::prev(after)->second;
@@ -227,10 +234,10 @@ double InputSignal::At(double t) const {
 
 std::string InputSignal::Covers(double t_first, double t_last) const {
   if (kind != kRecorded) return "";
-  if (t_first < steps.front().first || t_last > steps.back().first)
-    return "the input of " + path + " covers t = " + FormatNumber(steps.front().first) + " .. " +
-           FormatNumber(steps.back().first) + ", not " + FormatNumber(t_first) + " .. " +
-           FormatNumber(t_last);
+  if (Reached(t_first) < steps.front().first || t_last > Reached(steps.back().first))
+    return "the input of " + path + " covers t = " + FormatDouble(steps.front().first) + " .. " +
+           FormatDouble(steps.back().first) + ", not " + FormatDouble(t_first) + " .. " +
+           FormatDouble(t_last);
   return "";
 }
 

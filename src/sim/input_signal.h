@@ -4,7 +4,7 @@
 // each sample until the next (zero-order hold, src/sim/simulation.h).
 //
 //   2.5                            a constant
-//   multisine(rms=0.5, mean=2.5, band=0.001:0.05, sines=20, seed=1)
+//   multisine(rms=0.5, mean=0, band=0.001:0.05, sines=10, seed=1)
 //       u(t) = mean + rms sqrt(2/N) sum_i cos(2 pi f_i t + phi_i),
 //       N = sines frequencies f_i evenly spaced over the band (both ends
 //       included; one sine: the band's low end), phases phi_i uniform on
@@ -26,8 +26,11 @@
 //       finite (errors name file and line); sampling outside [first, last]
 //       row time is refused by Covers().
 //
-// Every key of multisine and prbs may be left out except rms and
-// amplitude; errors name the key and the signal as written.
+// multisine needs rms and band (f1 < f2 for two sines or more), prbs needs
+// amplitude; the other keys have the defaults shown. A time within 1e-9
+// (relative, at least 1e-9 s) of a step, a bit boundary or a row counts as
+// reached, so that k dt rounding (3 x 0.3 = 0.8999999999999999) does not
+// move a switch by a sample. Errors name the key and the signal as written.
 //
 // Usage:
 //   const InputSignal s = ParseInputSignal("prbs(amplitude=0.5, period=4)", "input");
@@ -55,9 +58,10 @@ struct InputSignal {
                                                  // recorded: every row (time, value)
   std::string path;                              // recorded: the file read
 
-  double At(double t) const;
+  double At(double t) const;  // NaN for a non-finite t
   // "" when every time in [t_first, t_last] can be sampled, else why not
-  // (a recorded input that starts later or ends earlier).
+  // (a recorded input that starts later or ends earlier, beyond the 1e-9
+  // slack).
   std::string Covers(double t_first, double t_last) const;
 };
 
@@ -66,8 +70,8 @@ struct InputSignal {
 InputSignal ParseInputSignal(const std::string& text, const std::string& what,
                              const std::string& base_dir = "");
 
-// One period of the maximum-length sequence of an order-bit Fibonacci LFSR
-// (2 <= order <= 20) from the nonzero start state.
+// One period of the maximum-length sequence of an order-bit Galois LFSR
+// (2 <= order <= 20) from the start state mod 2^order (0 taken as 1).
 std::vector<bool> MaximumLengthSequence(int order, uint32_t start);
 
 }  // namespace estlab

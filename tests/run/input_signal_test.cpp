@@ -103,6 +103,9 @@ TEST(InputSignal, StepsAndConstantsByHand) {
   EXPECT_EQ(s.At(499.0), 3.0);
   EXPECT_EQ(s.At(500.0), 2.0);
   EXPECT_EQ(s.At(1e6), 2.0);
+  // k dt rounding: 3 x 0.3 = 0.8999999999999999 reaches a step at 0.9.
+  EXPECT_EQ(ParseInputSignal("steps(0, 0.9:1)", "input").At(3 * 0.3), 1.0);
+  EXPECT_TRUE(std::isnan(s.At(std::nan(""))));
   const InputSignal c = ParseInputSignal("0.25", "input");
   EXPECT_EQ(c.kind, InputSignal::kConstant);
   EXPECT_EQ(c.At(3.0), 0.25);
@@ -138,8 +141,9 @@ TEST(InputSignal, ErrorsNameTheKey) {
       {"prbs(period=2)", "input prbs(...): 'amplitude=' is required"},
       {"prbs(amplitude=1, order=30)", "input prbs(...) order: expected a whole number in 2..20"},
       {"prbs(amplitude=1, period=0)", "input prbs(...) period: must be > 0 s"},
-      {"multisine(rms=1, band=0.05:0.01)", "input multisine(...) band: expected 0 < f1 <= f2"},
+      {"multisine(rms=1, band=0.05:0.01)", "input multisine(...) band: expected 0 < f1 < f2"},
       {"multisine(rms=1)", "input multisine(...): 'band=f1:f2' (Hz) is required"},
+      {"multisine(rms=1, band=1:1, sines=2)", "band: expected 0 < f1 < f2, got '1:1'"},
       {"multisine(rms=1, band=0.1:0.2, colour=red)", "unknown key 'colour'"},
       {"multisine(rms=1, rms=2, band=0.1:0.2)", "'rms' given twice"},
       {"steps(1, 5:2, 3:1)", "input steps(...): step times must increase, got 3 after 5"},
