@@ -4,6 +4,12 @@
 //   NLL(theta) = 1/2 sum_datasets sum_{k >= burn_in}
 //                [ log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi ]
 //
+// The filter starts each dataset from the prior mean x0 (the spec's, or
+// its first sample) with covariance P0; the initial states named in
+// TunerOptions::estimate_x0 are parameters too (adaptive/initial_states.h:
+// their entries of x0 come from theta, one row shared or one per dataset),
+// so the gradient in them is the AD through the whole run as for the rest.
+//
 // There is no second copy of the filters here: every predict and update is
 // the filter's own scalar-generic step (src/filters/ekf_step.h,
 // sigma_point_step.h, kalman_step.h), run with T = double or ceres::Jet, and
@@ -67,6 +73,7 @@
 #include <variant>
 #include <vector>
 
+#include "adaptive/initial_states.h"
 #include "adaptive/likelihood_setup.h"
 #include "adaptive/noise_param.h"
 #include "adaptive/physical_params.h"
@@ -109,13 +116,27 @@ class InnovationLikelihood {
   InnovationLikelihood(const FilterSpec& spec, const TunerOptions& options,
                        const std::vector<FilterData>& datasets);
 
-  // theta = [Q's | R's | the physical parameters'] (physical_params.h).
+  // theta = [Q's | R's | the physical parameters' (physical_params.h) |
+  //          the initial states' (initial_states.h)].
   int NumNoiseParams() const { return q_.NumParams() + r_.NumParams(); }
-  int NumParams() const { return NumNoiseParams() + phys_.NumParams(); }
+  int FirstX0Param() const { return NumNoiseParams() + phys_.NumParams(); }
+  int NumParams() const { return FirstX0Param() + x0s_.NumParams(); }
   std::vector<double> InitialTheta() const;
   std::vector<std::string> ParamNames() const;
   std::vector<bool> ParamIsLog() const;
   const PhysicalParams<Model>& physical() const { return phys_; }
+  const InitialStates& initial_states() const { return x0s_; }
+  // The prior mean of dataset `dataset` before any x0 is estimated: the
+  // spec's x0, or its first sample (x0 = first-sample).
+  Vec<double, kN> StartMean(std::size_t dataset) const {
+    return spec_.x0_first_sample ? PriorMean<Model, Meas>(spec_, *datasets_[dataset]) : x0_;
+  }
+  // The whole prior mean of dataset `dataset` at theta.
+  Vec<double, kN> PriorMeanAt(const double* theta, std::size_t dataset) const {
+    Vec<double, kN> x = StartMean(dataset);
+    x0s_.Apply(theta + FirstX0Param(), dataset, &x);
+    return x;
+  }
   const CovarianceParam<kN>& q_param() const { return q_; }
   const CovarianceParam<kM>& r_param() const { return r_; }
   long NumTerms() const { return terms_; }  // updates after burn-in, all datasets
@@ -256,6 +277,7 @@ class InnovationLikelihood {
   TunerOptions options_;
   Params params_;
   PhysicalParams<Model> phys_;
+  InitialStates x0s_;
   std::vector<const FilterData*> datasets_;
   Vec<double, kN> x0_;
   Mat<kN, kN> p0_;
@@ -310,6 +332,8 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
       r_(options.r_param, "r", likelihood_internal::OutputNames<Meas>(), {},
          likelihood_internal::InitialFromVector<kM>(spec.r, "R"), 0.0) {
   for (const FilterData& d : datasets) datasets_.push_back(&d);
+  x0s_ = ResolveInitialStates(options.estimate_x0, options.x0_per_file, datasets.size(),
+                              likelihood_internal::StateNames<Model>(), Model::kName);
   x0_ = ToVec<kN>(spec.x0);
   p0_ = likelihood_internal::InitialFromVector<kN>(spec.p0, "P0").matrix;
   if (!x0_.allFinite() || !p0_.allFinite()) throw InputError("x0 or P0 is not finite");
@@ -368,6 +392,10 @@ std::vector<double> InnovationLikelihood<Model, Meas>::InitialTheta() const {
   theta.insert(theta.end(), r.begin(), r.end());
   const auto& phys = phys_.InitialTheta();
   theta.insert(theta.end(), phys.begin(), phys.end());
+  for (int row = 0; row < x0s_.rows; ++row) {
+    const Vec<double, kN> x = StartMean(size_t(row));  // row = dataset when per file
+    for (int i : x0s_.index) theta.push_back(x(i));
+  }
   return theta;
 }
 
@@ -378,6 +406,8 @@ std::vector<std::string> InnovationLikelihood<Model, Meas>::ParamNames() const {
   names.insert(names.end(), r.begin(), r.end());
   const auto& phys = phys_.Names();
   names.insert(names.end(), phys.begin(), phys.end());
+  const auto& x0 = x0s_.Names(likelihood_internal::StateNames<Model>());
+  names.insert(names.end(), x0.begin(), x0.end());
   return names;
 }
 
@@ -387,6 +417,7 @@ std::vector<bool> InnovationLikelihood<Model, Meas>::ParamIsLog() const {
   const auto& r = r_.IsLog();
   out.insert(out.end(), r.begin(), r.end());
   for (int j = 0; j < phys_.NumParams(); ++j) out.push_back(phys_.IsLog(j));
+  out.resize(size_t(NumParams()), false);  // the initial states
   return out;
 }
 
@@ -415,12 +446,13 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
     b.propagated.resize(kN, count);
     b.measurement_points.resize(kM, count);
   }
-  for (const FilterData* data : datasets_) {
-    const FilterData& d = *data;
+  for (std::size_t set = 0; set < datasets_.size(); ++set) {
+    const FilterData& d = *datasets_[set];
     if constexpr (std::is_same_v<P, Params>) {
       if (cvodes_ != nullptr) cvodes_ = MakeTransition<Model>(p, cvodes_options_);
     }
-    b.x = (spec_.x0_first_sample ? PriorMean<Model, Meas>(spec_, d) : x0_).template cast<T>();
+    b.x = StartMean(set).template cast<T>();
+    x0s_.Apply(theta + FirstX0Param(), set, &b.x);
     b.P = p0_.template cast<T>();
     b.have_propagated = false;
     long update_index = 0;

@@ -95,6 +95,16 @@ void ApplyVerdict(const Eigen::MatrixXd& H, const std::vector<bool>& lower_is_co
     return;
   }
   if (r.status == TuneStatus::kNoConvergence) return;  // the optimiser's own word stands
+  if (H.size() > 0 && !H.allFinite()) {
+    r.status = TuneStatus::kUnverified;
+    r.message =
+        "the Hessian of the NLL is not finite at the end point (the filter fails within one "
+        "finite-difference step of it, often a state the model clips with max, min or sqrt "
+        "near 0): it cannot be verified as a minimum; start elsewhere (--starts) or closer to "
+        "the data" +
+        before;
+    return;
+  }
   std::vector<bool> free(r.theta.size());
   for (size_t i = 0; i < free.size(); ++i) free[i] = !r.at_bound[i];
   double lambda_min = 0.0, lambda_max = 0.0;

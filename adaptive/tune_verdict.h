@@ -25,6 +25,8 @@
 //                        >= 0). A log parameter's lower bound stands for its
 //                        constraint's 0 (a variance or a > 0 parameter the data
 //                        push to 0) and is flagged at_bound without failing;
+// Between 2 and 3, unverified: H is not finite (the filter fails within one
+// finite-difference step of the end point), so no minimum can be verified.
 // (kNoConvergence, no tolerance met, is kept after check 1: the curvature of
 // a point the optimiser did not finish with says nothing new.)
 // A flat direction (|lambda| <= kNegativeRatio max|lambda|) is a valley of

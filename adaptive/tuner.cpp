@@ -46,6 +46,8 @@ const char* TuneStatusName(TuneStatus status) {
       return "worse-than-start";
     case TuneStatus::kAtBound:
       return "at-bound";
+    case TuneStatus::kUnverified:
+      return "unverified";
   }
   return "?";
 }
@@ -86,6 +88,15 @@ bool TunerOptions::IsValid(std::string* error) const {
   if (!e.params && !estimate.empty())
     return fail("the " + name +
                 " estimator estimates Q and R only; physical parameters need the ml estimator");
+  if (!e.x0 && (!estimate_x0.empty() || x0_per_file)) {
+    std::string with_x0;
+    for (const EstimatorInfo& other : Estimators())
+      if (other.x0) with_x0 += (with_x0.empty() ? "" : " and ") + std::string(other.name);
+    return fail(std::string(estimate_x0.empty() ? "--x0-per-file" : "--estimate-x0") +
+                " applies to the " + with_x0 + " estimators, not " + name);
+  }
+  if (x0_per_file && estimate_x0.empty())
+    return fail("--x0-per-file needs --estimate-x0 (the states estimated per file)");
   for (double v : log_lower)
     if (std::isnan(v)) return fail("a lower bound is NaN");
   for (double v : log_upper)

@@ -144,6 +144,12 @@ struct TunerOptions {
   // Physical parameters estimated with Q and R (their initial values are the
   // spec's params). Empty: Q and R only.
   std::vector<EstimatedParam> estimate;
+  // Initial states estimated with them (the filter's prior mean; its
+  // covariance stays the spec's P0): the states named, one x0 shared by
+  // every dataset, or with x0_per_file each dataset its own
+  // (adaptive/initial_states.h). Estimators whose row says x0 only.
+  std::vector<std::string> estimate_x0;
+  bool x0_per_file = false;
 
   // EM (Estimator::kEm): stop when |NLL_i - NLL_{i-1}| <= em_tolerance * |NLL_i|
   // (max_iterations EM iterations at most); then, with em_compare_ml, run
@@ -182,6 +188,8 @@ enum class TuneStatus {
   kNotAMinimum,      // the NLL curves downwards along a free direction (a saddle)
   kWorseThanStart,   // the final NLL is above the initial guess's
   kAtBound,          // a parameter ended against its search box, not its constraint
+  kUnverified,       // the Hessian at the end point is not finite (the filter fails
+                     // within a finite-difference step): no minimum can be verified
 };
 const char* TuneStatusName(TuneStatus status);
 
@@ -233,6 +241,12 @@ struct TuneResult {
   std::vector<bool> is_physical;
   std::vector<std::string> param_names;
   std::vector<double> param_initial, param_values, param_std_errors;
+  // The estimated initial states (TunerOptions::estimate_x0): their names,
+  // and per row (one shared by every dataset, or one per dataset) the whole
+  // x0 at the start and at the estimate, and the standard errors (NaN for
+  // the states not estimated). Empty when no x0 is estimated.
+  std::vector<std::string> x0_names;
+  std::vector<std::vector<double>> x0_initial, x0, x0_std_errors;
 
   // The correlation matrix of theta (k x k, row-major; NaN where a
   // parameter is not identifiable), the eigenvalues of the observed Fisher
@@ -250,7 +264,8 @@ struct TuneResult {
   double qc = 0.0;
   double dt_ref = 0.0;
   std::vector<double> q, r;
-  // The tuned filter spec: the input spec with q / qc / r replaced.
+  // The tuned filter spec: the input spec with q / qc / r replaced (and
+  // the estimated parameters, and x0 by the first row's estimate).
   FilterSpec tuned_spec;
 
   double nll_initial = 0.0;  // at the initial guess (+inf if the filter failed)

@@ -51,6 +51,28 @@ bool ObservedFisher(const Objective<Model, Meas>& objective, const std::vector<d
 // Standard errors, correlations and the identifiability sentences
 // (adaptive/identifiability.h), and the physical parameters on their
 // natural scale.
+// The estimated initial states (TuneResult::x0 rows and their SEs) and the
+// tuned spec's x0 (the first row's; first-sample no longer applies to it).
+template <class Model, class Meas>
+void FillInitialStates(const InnovationLikelihood<Model, Meas>& lik, TuneResult* result) {
+  const InitialStates& x0s = lik.initial_states();
+  if (x0s.empty()) return;
+  const auto states = likelihood_internal::StateNames<Model>();
+  for (int i : x0s.index) result->x0_names.push_back(states[i]);
+  int at = lik.FirstX0Param();
+  for (int row = 0; row < x0s.rows; ++row) {
+    const auto start = lik.PriorMeanAt(result->theta_initial.data(), size_t(row));
+    const auto x = lik.PriorMeanAt(result->theta.data(), size_t(row));
+    std::vector<double> se(x.size(), std::numeric_limits<double>::quiet_NaN());
+    for (int i : x0s.index) se[i] = result->std_errors[at++];
+    result->x0_initial.emplace_back(start.data(), start.data() + start.size());
+    result->x0.emplace_back(x.data(), x.data() + x.size());
+    result->x0_std_errors.push_back(se);
+  }
+  result->tuned_spec.x0 = result->x0.front();
+  result->tuned_spec.x0_first_sample = false;
+}
+
 template <class Model, class Meas>
 void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions& options,
                      const Eigen::MatrixXd& H, TuneResult* result) {
@@ -84,6 +106,7 @@ void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions
                                                      : result->std_errors[i]);
     result->tuned_spec.params[phys.ModelIndex(j)] = value;
   }
+  FillInitialStates(objective.likelihood(), result);
 }
 
 }  // namespace tuner_internal

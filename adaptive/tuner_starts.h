@@ -157,7 +157,8 @@ double ScaleSearch(const Objective<Model, Meas>& objective, const std::vector<do
 }
 
 // The bounds of every parameter: Q's and R's (ResolveBounds about the
-// initial guess), then the physical parameters'.
+// initial guess), then the physical parameters', then the initial states'
+// (none: a state's value is not constrained).
 template <class Model, class Meas>
 void LikelihoodBounds(const InnovationLikelihood<Model, Meas>& lik, const TunerOptions& options,
                       std::vector<double>* lower, std::vector<double>* upper) {
@@ -167,12 +168,15 @@ void LikelihoodBounds(const InnovationLikelihood<Model, Meas>& lik, const TunerO
   ResolveBounds(options, std::vector<double>(theta0.begin(), theta0.begin() + noise),
                 std::vector<bool>(is_log.begin(), is_log.begin() + noise), lower, upper);
   lik.physical().Bounds(lower, upper);
+  lower->resize(size_t(lik.NumParams()), -kInf);
+  upper->resize(size_t(lik.NumParams()), kInf);
 }
 
 // Where the multi-start spreads each parameter (SpreadInterval) and whether
 // its lower bound stands for its constraint (the verdict's at-bound rule):
 // Q's and R's log-variances and > 0 parameters (log scale: the bound stands
-// for 0), a >= 0 parameter whose lower bound is 0.
+// for 0), a >= 0 parameter whose lower bound is 0. An initial state spreads
+// as an unbounded physical parameter.
 template <class Model, class Meas>
 void ParameterFacts(const InnovationLikelihood<Model, Meas>& lik, const TunerOptions& o,
                     const std::vector<double>& lower, const std::vector<double>& upper,
@@ -184,7 +188,7 @@ void ParameterFacts(const InnovationLikelihood<Model, Meas>& lik, const TunerOpt
   const auto& phys = lik.physical();
   for (int i = 0; i < lik.NumParams(); ++i) {
     bool user_box = false, natural = is_log[i];
-    if (i >= noise) {
+    if (i >= noise && i < lik.FirstX0Param()) {
       const int j = i - noise;
       const EstimatedParam& e = phys.estimated()[j];
       user_box = !std::isnan(e.lower) && !std::isnan(e.upper);

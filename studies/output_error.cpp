@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "adaptive/identifiability.h"
+#include "adaptive/initial_states.h"
 #include "adaptive/theta_scale.h"
 #include "src/core/types.h"
 
@@ -207,32 +208,15 @@ void MapParams(const ModelEntry& model, const FilterSpec& spec,
 void MapStarts(const ModelEntry& model, const FilterSpec& spec, const std::vector<FilterData>& runs,
                const OutputErrorOptions& options, ThetaMap* map, OutputErrorResult* r,
                std::vector<double>* lower, std::vector<double>* upper) {
-  for (const std::string& name : options.estimate_x0) {
-    const auto it = std::find(model.states.begin(), model.states.end(), name);
-    if (it == model.states.end()) {
-      std::string list;
-      for (const std::string& s : model.states) list += (list.empty() ? "" : ", ") + s;
-      throw InputError("--estimate-x0: '" + name + "' is not a state of model '" + model.name +
-                       "' (" + list + ")");
-    }
-    const int i = int(it - model.states.begin());
-    if (std::find(map->x0_index.begin(), map->x0_index.end(), i) != map->x0_index.end())
-      throw InputError("--estimate-x0: '" + name + "' is named twice");
-    map->x0_index.push_back(i);
-    r->x0_names.push_back(name);
-  }
-  if (options.x0_per_file && runs.size() < 2)
-    throw InputError("--x0-per-file needs two --data files or more (one x0 per file)");
-  if (options.x0_per_file && options.estimate_x0.empty())
-    throw InputError("--x0-per-file needs --estimate-x0 (the states estimated per file)");
-  const bool whole = !options.estimate_x0.empty();
-  const size_t rows = options.x0_per_file ? runs.size() : 1;
-  map->x0.assign(rows, spec.x0);
-  for (size_t row = 0; row < rows; ++row) {
-    for (size_t j = 0; j < map->x0_index.size(); ++j) {
-      const int i = map->x0_index[j];
-      r->names.push_back((rows > 1 ? "x0[" + std::to_string(row + 1) + "] " : "x0 ") +
-                         model.states[i]);
+  const InitialStates x0s = ResolveInitialStates(options.estimate_x0, options.x0_per_file,
+                                                 runs.size(), model.states, model.name);
+  map->x0_index = x0s.index;
+  for (int i : x0s.index) r->x0_names.push_back(model.states[i]);
+  const bool whole = !x0s.empty();
+  map->x0.assign(std::max(x0s.rows, 1), spec.x0);
+  for (const std::string& name : x0s.Names(model.states)) r->names.push_back(name);
+  for (int row = 0; row < x0s.rows; ++row) {
+    for (int i : x0s.index) {
       r->is_log.push_back(false);
       r->theta_initial.push_back(spec.x0[i]);
       lower->push_back(-std::numeric_limits<double>::infinity());

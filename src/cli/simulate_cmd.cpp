@@ -108,8 +108,8 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
 }
 
 // The `param = NAME=VALUE` lines of a tuned.ini (and its `x0 = NAME=VALUE,...`
-// line into *x0); its filter noise lines are skipped, any other key is an
-// error naming FILE:LINE.
+// line into *x0); its filter noise and prior covariance lines are skipped,
+// any other key is an error naming FILE:LINE.
 std::vector<std::pair<std::string, double>> ConfigParams(
     const std::string& path, std::vector<std::pair<std::string, double>>* x0) {
   std::ifstream in(path);
@@ -129,10 +129,10 @@ std::vector<std::pair<std::string, double>> ConfigParams(
     } else if (key == "x0") {
       for (const auto& p : ParseAssignments({value}, where + ": x0")) x0->push_back(p);
     } else if (key != "q" && key != "q-diag" && key != "q-white-accel" && key != "r" &&
-               key != "r-diag") {
+               key != "r-diag" && key != "p0" && key != "p0-diag") {
       throw InputError(where +
                        ": 'estlab simulate --config' reads 'param' and 'x0' lines (and skips a "
-                       "tuned.ini's Q and R), not '" +
+                       "tuned.ini's Q, R and P0), not '" +
                        key + "'");
     }
   }

@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include "adaptive/initial_states.h"
 #include "src/cli/commands.h"
 #include "src/cli/plot_run.h"
 #include "src/cli/tune_output_error.h"
@@ -90,6 +91,17 @@ supported (it linearises once, at the nominal parameters); the model's
 parameters must be generic over the scalar (built-in: pendulum; every model
 file).
 
+Initial states (--estimate-x0 h1,h2): with ml the named entries of the
+filter's prior mean x0 join theta (natural scale, unbounded, from --x0; the
+prior covariance stays --p0-diag or --p0: give a small one when the records start at
+a fixed unknown state), with exact gradients through the whole run; with
+output-error they are where the free simulation starts. One x0 is shared by
+every --data file, or with --x0-per-file each file has its own while the
+parameters and the noise are shared. The report, --json ("tuned": {"x0":
+...}, "x0_std_errors", or "x0_per_file") and tuned.ini (x0 and p0 lines that
+simulate, filter and smooth --config read) give x0 with standard errors. EM
+and ALS do not estimate x0.
+
 Tuning: minimises NLL = 1/2 sum_k [log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi]
 over the innovations nu_k (covariance S_k) of every dataset after --burn-in
 updates. Parameters are log-variances (diag, scalar, white-accel's log qc) or
@@ -146,7 +158,9 @@ not-a-minimum (the direction named in parameter names), worse-than-start,
 at-bound (a search-box bound, not a constraint: a variance or a > 0
 parameter pushed to its lower log bound, or a >= 0 parameter at 0, is a
 constrained minimum and stays converged, flagged 'at a bound'),
-no-convergence (iteration limit, line search) or all-starts-diverged. Each
+no-convergence (iteration limit, line search), unverified (the Hessian is
+not finite at the end: the filter fails within a finite-difference step of
+it) or all-starts-diverged. Each
 prints the report, a sentence on stderr and exits 1; --out is written only
 with --keep-best, and then says in the file that it is not a verified fit.
 The convergence trace ("trace" in the JSON, the progress line and the
@@ -245,6 +259,13 @@ std::string IniLine(const std::string& symbol, NoiseParam param, bool white_acce
   return symbol + " = " + MatrixText(a, n) + "\n";
 }
 
+// With an estimated x0, the prior covariance it was fitted with (else a
+// --config reader would pair the x0 with its own default P0): "" otherwise.
+std::string X0PriorLine(const FilterSpec& spec, size_t x0_rows, int n) {
+  if (x0_rows == 0) return "";
+  return IniLine("p0", NoiseParam::kFixed, false, 0.0, spec.p0, n);
+}
+
 void WriteMatrix(JsonWriter* j, const std::vector<double>& a, int n) {
   j->BeginArray();
   for (int i = 0; i < n; ++i)
@@ -300,7 +321,14 @@ void PrintStarts(const TuneResult& r) {
   }
 }
 
-void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r, size_t n_data,
+// The tuned initial states, as every estimator reports them (tune_x0.h).
+X0Report TunedX0(const ModelEntry& model, const TuneResult& r,
+                 const std::vector<FilterData>& datasets) {
+  return MakeX0Report(model.states, r.x0_names, r.x0_initial, r.x0, r.x0_std_errors, datasets);
+}
+
+void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r,
+                const std::vector<FilterData>& datasets,
                 const std::vector<Validation>& validations, double horizon,
                 const std::string& out_path) {
   const int n = int(model.states.size());
@@ -308,7 +336,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
   std::cout << std::setprecision(6);
   std::cout << "model         " << model.name << ", measurement " << spec.measurement << ", filter "
             << FilterKindName(spec.kind()) << (spec.iterated() ? " (iterated)" : "")
-            << "\ndata          " << n_data << " dataset(s), " << r.updates
+            << "\ndata          " << datasets.size() << " dataset(s), " << r.updates
             << " innovations after burn-in\nestimator     " << r.estimator
             << (r.solver.empty() ? "" : " (" + r.solver + ")") << ", " << r.starts.size()
             << " start(s), status " << TuneStatusName(r.status) << "\n";
@@ -347,6 +375,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
                  "further, so the estimate and its SE are the box's: widen the box, or fix the "
                  "parameter (--q-param/--r-param fixed, or leave it out of --estimate-param)\n";
   PrintPhysical(r);
+  PrintX0(TunedX0(model, r, datasets));
   std::cout << "\ntuned Q"
             << (r.q_white_accel ? " (qc = " + FormatNumber(r.qc) +
                                       ", shown at dt = " + FormatNumber(r.dt_ref) + ")"
@@ -372,6 +401,7 @@ void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResul
 void WriteProfileJson(JsonWriter* j, const ProfileResult& p, const std::vector<std::string>& files);
 
 std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r,
+                       const std::vector<FilterData>& datasets,
                        const std::vector<Validation>& validations, const std::string& out_path,
                        const std::optional<ProfileResult>& profile,
                        const std::vector<std::string>& profile_files) {
@@ -389,8 +419,12 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     WriteTuned(&j, r.q_param, r.q_white_accel, r.qc, r.q, n);
     j.Key("r");
     WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
-    j.Key("params").Object(r.param_names, r.param_values).EndObject();
+    j.Key("params").Object(r.param_names, r.param_values);
+    const X0Report x0 = TunedX0(model, r, datasets);
+    WriteTunedX0Json(&j, x0);
+    j.EndObject();
     j.Key("std_errors").Object(r.param_names, r.param_std_errors);
+    WriteX0DetailJson(&j, x0);
     j.Key("params_initial").Object(r.param_names, r.param_initial);
     j.Key("q_matrix");
     WriteMatrix(&j, r.q, n);
@@ -562,14 +596,8 @@ int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const 
   oe.horizon = horizon;
   oe.max_iterations = options.max_iterations;
   oe.bound_width = options.bound_width;
-  if (vm.count("estimate-x0")) {
-    std::stringstream names(vm["estimate-x0"].as<std::string>());
-    for (std::string name; std::getline(names, name, ',');) {
-      if (Trim(name).empty()) throw InputError("--estimate-x0: an empty state name");
-      oe.estimate_x0.push_back(Trim(name));
-    }
-  }
-  oe.x0_per_file = vm.count("x0-per-file") > 0;
+  oe.estimate_x0 = options.estimate_x0;
+  oe.x0_per_file = options.x0_per_file;
   const OutputErrorResult fit = FitOutputError(model, spec, options.estimate, datasets, oe);
   std::vector<Validation> validations;
   if (fit.ok && vm.count("validate"))
@@ -586,13 +614,7 @@ int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const 
     o << IniLine("r", NoiseParam::kFixed, false, 0.0, spec.r, m);
     for (size_t i = 0; i < fit.param_names.size(); ++i)
       o << "param = " << fit.param_names[i] << "=" << FormatDouble(fit.param_values[i]) << "\n";
-    for (size_t row = 0; row < fit.x0.size(); ++row) {
-      std::string line;
-      for (int i = 0; i < n; ++i)
-        line += (i ? "," : "") + model.states[i] + "=" + FormatDouble(fit.x0[row][i]);
-      o << (row == 0 && fit.x0.size() == 1 ? "" : "# " + datasets[row].path + ": ")
-        << "x0 = " << line << "\n";
-    }
+    o << X0IniLines(FitX0(model, spec, fit, datasets)) << X0PriorLine(spec, fit.x0.size(), n);
     (*out)->Commit();
   }
   const std::string wrote = write_out ? out_path : "";
@@ -632,8 +654,9 @@ int RunTune(const std::vector<std::string>& args) {
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
       "estimate-x0", po::value<std::string>(),
-      "output-error: also estimate these initial states (NAME,NAME...; initial values from "
-      "--x0); the simulation then runs over the whole record from x0")(
+      "also estimate these initial states (NAME,NAME...; initial values from --x0): ml, the "
+      "filter's prior mean (its covariance stays --p0-diag); output-error, the start of the "
+      "simulation over the whole record")(
       "x0-per-file",
       "with --estimate-x0: each --data file its own initial state (the "
       "parameters shared)")(
@@ -682,15 +705,16 @@ int RunTune(const std::vector<std::string>& args) {
   } else if (vm.count("profile-out")) {
     throw InputError("--profile-out needs --profile");
   }
+  auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
   TunerOptions options = BuildTunerOptions(TunerSettingsFromVariablesMap(vm), GuessKey(vm, "q"),
                                            GuessKey(vm, "r"));
   const EstimatorInfo& estimator = InfoOf(options.estimator);
   // Output error simulates: a model file needs no tuner compiled for it.
   const bool output_error = !estimator.tuner;
-  if ((vm.count("estimate-x0") || vm.count("x0-per-file")) && !estimator.x0)
-    throw InputError(std::string(vm.count("estimate-x0") ? "--estimate-x0" : "--x0-per-file") +
-                     " applies to --estimator output-error (the prediction-error fit of the "
-                     "initial state is not built yet)");
+  options.estimate_x0 = ParseEstimatedStates(text("estimate-x0"));
+  options.x0_per_file = vm.count("x0-per-file") > 0;
+  std::string error;  // before a model file compiles: a wrong estimator for x0 says so at once
+  if (!options.IsValid(&error)) throw InputError(error);
   const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = !output_error});
   if (model.tune == nullptr && !output_error)
     throw InputError("model '" + model.name + "' has no tuner");
@@ -704,13 +728,11 @@ int RunTune(const std::vector<std::string>& args) {
   const FilterSpec spec = estlab::BuildFilterSpec(settings, model);
 
   options.seed = SeedOf(settings);
-  auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
   const double horizon = ParseNumber(vm["horizon"].as<std::string>(), "--horizon");
   if (!(horizon > 0)) throw InputError("--horizon must be > 0 s, got " + FormatNumber(horizon));
   options.estimate =
       ParseEstimatedParams(text("estimate-param"), text("param-bounds"), text("param-prior"));
 
-  std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
 
   std::vector<FilterData> datasets;
@@ -722,6 +744,9 @@ int RunTune(const std::vector<std::string>& args) {
     datasets.push_back(LoadFilterData(path, model, meas, renames, states, ConstantInputGiven(vm)));
     CheckPriorTime(spec, datasets.back());
   }
+  // The initial states named, checked against the model before any work.
+  ResolveInitialStates(options.estimate_x0, options.x0_per_file, datasets.size(), model.states,
+                       model.name);
   if (vm.count("validate") && model.run_filter == nullptr)
     throw InputError("--validate: the filter runner is not available");
   // Open the output first so an unwritable path fails before the work.
@@ -772,14 +797,16 @@ int RunTune(const std::vector<std::string>& args) {
     for (size_t i = 0; i < result.param_names.size(); ++i)
       out->stream() << "param = " << result.param_names[i] << "="
                     << FormatDouble(result.param_values[i]) << "\n";
+    out->stream() << X0IniLines(TunedX0(model, result, datasets))
+                  << X0PriorLine(spec, result.x0.size(), n);
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << ResultJson(model, spec, result, validations, write_out ? out_path : "", profile,
+    std::cout << ResultJson(model, spec, result, datasets, validations, write_out ? out_path : "", profile,
                             profile_files)
               << "\n";
   } else {
-    PrintHuman(model, spec, result, datasets.size(), validations, horizon,
+    PrintHuman(model, spec, result, datasets, validations, horizon,
                write_out ? out_path : "");
     if (profile) PrintProfile(*profile, profile_files, profile_message);
   }

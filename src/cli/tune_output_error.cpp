@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 
+#include "src/cli/tune_x0.h"
 #include "src/io/json.h"
 
 namespace estlab::cli {
@@ -13,18 +14,14 @@ const char* StatusName(const OutputErrorResult& r) {
   return r.ok ? (r.converged ? "converged" : "no-convergence") : "failed";
 }
 
-// The estimated components of x0 row `row` (names and values, or SEs).
-std::vector<double> Estimated(const ModelEntry& model, const OutputErrorResult& r,
-                              const std::vector<double>& row) {
-  std::vector<double> out;
-  for (const std::string& name : r.x0_names) {
-    const auto it = std::find(model.states.begin(), model.states.end(), name);
-    out.push_back(row[size_t(it - model.states.begin())]);
-  }
-  return out;
-}
-
 }  // namespace
+
+X0Report FitX0(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
+               const std::vector<FilterData>& runs) {
+  return MakeX0Report(model.states, r.x0_names,
+                      std::vector<std::vector<double>>(r.x0.size(), spec.x0), r.x0,
+                      r.x0_std_errors, runs);
+}
 
 void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
                       const std::vector<FilterData>& runs, double horizon,
@@ -44,16 +41,7 @@ void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const Out
               << " " << std::setw(10) << r.param_std_errors[j]
               << (r.at_bound[j] ? "  at a bound" : "") << "\n";
   }
-  for (size_t row = 0; row < r.x0.size(); ++row) {
-    std::cout << "\n  initial state" << (r.x0.size() > 1 ? " of " + runs[row].path : "") << "\n";
-    const std::vector<double> v = Estimated(model, r, r.x0[row]);
-    const std::vector<double> se = Estimated(model, r, r.x0_std_errors[row]);
-    const std::vector<double> v0 = Estimated(model, r, spec.x0);
-    for (size_t i = 0; i < v.size(); ++i)
-      std::cout << "  " << std::left << std::setw(26) << r.x0_names[i] << std::right
-                << std::setw(12) << v0[i] << " " << std::setw(12) << v[i] << " " << std::setw(10)
-                << se[i] << "\n";
-  }
+  PrintX0(FitX0(model, spec, r, runs));
   for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
   std::cout << "\nresidual sd   " << r.residual_sd << "\nfit RMSE      ";
   for (size_t j = 0; j < r.rmse.size(); ++j)
@@ -75,21 +63,11 @@ std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
   j.Key("status").Value(StatusName(r));
   j.Key("message").Value(r.message);
   j.Key("tuned").BeginObject().Key("params").Object(r.param_names, r.param_values);
-  if (r.x0.size() == 1) j.Key("x0").Object(r.x0_names, Estimated(model, r, r.x0[0]));
+  const X0Report x0 = FitX0(model, spec, r, runs);
+  WriteTunedX0Json(&j, x0);
   j.EndObject();
   j.Key("std_errors").Object(r.param_names, r.param_std_errors);
-  if (r.x0.size() == 1)
-    j.Key("x0_std_errors").Object(r.x0_names, Estimated(model, r, r.x0_std_errors[0]));
-  if (r.x0.size() > 1) {
-    j.Key("x0_per_file").BeginArray();
-    for (size_t row = 0; row < r.x0.size(); ++row) {
-      j.BeginObject().Key("data").Value(runs[row].path);
-      j.Key("x0").Object(r.x0_names, Estimated(model, r, r.x0[row]));
-      j.Key("std_errors").Object(r.x0_names, Estimated(model, r, r.x0_std_errors[row]));
-      j.EndObject();
-    }
-    j.EndArray();
-  }
+  WriteX0DetailJson(&j, x0);
   j.Key("params_initial").Object(r.param_names, r.param_initial);
   j.Key("parameters").Value(r.names).Key("theta").Value(r.theta);
   j.Key("identifiability").Value(r.identifiability);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "src/cli/tune_validate.h"
+#include "src/cli/tune_x0.h"
 #include "src/registry/registry.h"
 #include "studies/output_error.h"
 
@@ -20,6 +21,10 @@ void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const Out
 
 // "tuned": {"params": {...}, "x0": {STATE: value, ...}} (the shared x0), and
 // "x0_per_file": [{"data": PATH, "x0": {...}, "std_errors": {...}}, ...].
+// The fit's estimated initial states, for the report and tuned.ini.
+X0Report FitX0(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
+               const std::vector<FilterData>& runs);
+
 std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
                             const OutputErrorResult& r, const std::vector<FilterData>& runs,
                             double horizon, const std::vector<Validation>& validations,

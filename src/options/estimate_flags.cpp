@@ -80,4 +80,14 @@ std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
   return out;
 }
 
+std::vector<std::string> ParseEstimatedStates(const std::string& names) {
+  std::vector<std::string> out;
+  if (Trim(names).empty()) return out;
+  for (const std::string& name : SplitOn(names, ',')) {
+    if (name.empty()) throw InputError("--estimate-x0: an empty state name in '" + names + "'");
+    out.push_back(name);
+  }
+  return out;
+}
+
 }  // namespace estlab

@@ -11,6 +11,7 @@
 //   --param-bounds    NAME=LO:HI[,...]   natural scale; either side may be
 //                                        empty (its default: see tuner.h)
 //   --param-prior     NAME=normal:MEAN:SD[,...]
+//   --estimate-x0     STATE[,STATE...]
 // A bound or prior for a name not in --estimate-param is an error, so is a
 // repeated name.
 #ifndef ESTLAB_OPTIONS_ESTIMATE_FLAGS_H_
@@ -27,6 +28,11 @@ namespace estlab {
 std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
                                                  const std::string& bounds,
                                                  const std::string& priors);
+
+// --estimate-x0 NAME[,NAME...]: the state names as written (checked against
+// the model by ResolveInitialStates, adaptive/initial_states.h); "" gives
+// none. Throws InputError for an empty name.
+std::vector<std::string> ParseEstimatedStates(const std::string& names);
 
 }  // namespace estlab
 

@@ -9,7 +9,10 @@
 //   * g and L together: reported as not separately identifiable, g/L named
 //     and estimated;
 //   * AnalyseFisher on hand-made Hessians with known answers;
-//   * the option parser's errors.
+//   * the option parser's errors;
+//   * initial states as parameters (--estimate-x0): the NLL equals the
+//     spec's with that x0 written in (per file: the sum over the files),
+//     AD gradients in x0 (EKF, UKF, CVODES), a tuned x0 against the truth.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -300,6 +303,128 @@ TEST(ParamEstimation, BoundsHoldAndAreFlagged) {
     EXPECT_TRUE(r.at_bound[3]) << MlSolverName(form);
     EXPECT_FALSE(r.at_bound[2]) << MlSolverName(form);
   }
+}
+
+// Initial states as parameters (TunerOptions::estimate_x0,
+// adaptive/initial_states.h). The reference is the likelihood of the same
+// spec with that x0 written in, no x0 estimated: the NLL must be the same
+// number, bit for bit; with x0_per_file each dataset takes its own row, so
+// the NLL is the sum of the single-dataset references. The AD gradient in
+// x0 (through the whole filter run) against central differences.
+TEST(InitialStateParams, NllIsTheSpecsWithThatX0AndPerFileRowsAreEachFiles) {
+  const std::vector<FilterData> data = {PendulumData(9, 300), PendulumData(10, 300)};
+  const std::vector<FilterData> first = {data[0]}, second = {data[1]};
+  TunerOptions options = Options({"L"});
+  options.estimate_x0 = {"omega", "theta"};
+  TunerOptions plain = options;
+  plain.estimate_x0.clear();
+  const FilterSpec spec = Spec(EkfOptions{});
+  auto moved = [&](double theta0, double omega0) {
+    FilterSpec s = spec;
+    s.x0 = {theta0, omega0};
+    return s;
+  };
+  const InnovationLikelihood<P, P::Angle> shared(spec, options, data);
+  ASSERT_EQ(shared.NumParams(), 5);
+  EXPECT_EQ(shared.ParamNames()[3], "x0 omega");
+  EXPECT_EQ(shared.ParamNames()[4], "x0 theta");
+  std::vector<double> theta = shared.InitialTheta();
+  EXPECT_EQ(theta[3], 0.0);  // the spec's x0 in the order named
+  EXPECT_EQ(theta[4], 1.2);
+  theta[3] = 0.3, theta[4] = 1.05;
+  const InnovationLikelihood<P, P::Angle> ref(moved(1.05, 0.3), plain, data);
+  double nll = 0.0, nll_ref = 0.0;
+  ASSERT_TRUE(shared.Nll(theta.data(), &nll));
+  ASSERT_TRUE(ref.Nll(theta.data(), &nll_ref));  // its theta: the first three
+  EXPECT_EQ(nll, nll_ref);
+  const double nll_start = NegLogLikelihood(shared, shared.InitialTheta().data());
+  EXPECT_GT(std::abs(nll - nll_start), 1.0) << "x0 must move the NLL for this test to see it";
+
+  options.x0_per_file = true;
+  const InnovationLikelihood<P, P::Angle> per(spec, options, data);
+  ASSERT_EQ(per.NumParams(), 7);
+  EXPECT_EQ(per.ParamNames()[5], "x0[2] omega");
+  EXPECT_EQ(per.ParamNames()[6], "x0[2] theta");
+  std::vector<double> theta_per = theta;
+  theta_per.push_back(-0.2);
+  theta_per.push_back(1.3);
+  const InnovationLikelihood<P, P::Angle> ref1(moved(1.05, 0.3), plain, first);
+  const InnovationLikelihood<P, P::Angle> ref2(moved(1.3, -0.2), plain, second);
+  const double sum = NegLogLikelihood(ref1, theta.data()) + NegLogLikelihood(ref2, theta.data());
+  EXPECT_NEAR(NegLogLikelihood(per, theta_per.data()), sum, 1e-12 * std::abs(sum));
+
+  uint64_t seed = 90;
+  CheckGradient(shared, seed++, "ekf x0");
+  CheckGradient(per, seed++, "ekf x0/file");
+  const InnovationLikelihood<P, P::Angle> ukf(
+      Spec(SigmaPointOptions{.rule = SigmaRule::kUnscented, .alpha = 0.5}), options, data);
+  CheckGradient(ukf, seed++, "ukf x0/file");
+  FilterSpec cv = spec;
+  cv.transition.integrator = Integrator::kCvodes;
+  cv.transition.rtol = 1e-12;
+  cv.transition.atol = 1e-14;
+  const std::vector<FilterData> short_data = {PendulumData(11, 150)};
+  options.x0_per_file = false;
+  const InnovationLikelihood<P, P::Angle> cvodes(cv, options, short_data);
+  CheckGradient(cvodes, seed++, "cvodes x0", {.h = 1e-3, .fourth_order = true});
+}
+
+// The whole tuner with x0 estimated: simulated from x0 = (1.2, 0) exactly
+// (P0 tiny), started at (1.0, 0.3); converged, the truth within 3 SE, the
+// report's rows and the tuned spec's x0 the estimate, the NLL at the
+// estimate at most the truth's.
+TEST(InitialStateParams, TunerRecoversTheInitialStateAndReportsIt) {
+  const std::vector<FilterData> data = {PendulumData(12, 1000)};
+  FilterSpec spec = Spec(EkfOptions{});
+  spec.x0 = {1.0, 0.3};
+  spec.p0 = {1e-8, 0.0, 0.0, 1e-8};
+  TunerOptions options = Options({"L", "b"});
+  options.estimate_x0 = {"theta", "omega"};
+  const TuneResult r = TuneWith<P, P::Angle>(spec, options, data);
+  ASSERT_TRUE(r.IsConverged()) << r.message;
+  ASSERT_EQ(r.x0.size(), 1u);
+  ASSERT_EQ(r.x0_names, (std::vector<std::string>{"theta", "omega"}));
+  const double truth[2] = {1.2, 0.0};
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(r.x0[0][i], r.theta[4 + i]);
+    EXPECT_EQ(r.x0_std_errors[0][i], r.std_errors[4 + i]);
+    EXPECT_EQ(r.x0_initial[0][i], spec.x0[i]);
+    EXPECT_EQ(r.tuned_spec.x0[i], r.x0[0][i]);
+    EXPECT_LE(std::abs(r.x0[0][i] - truth[i]), 3 * r.x0_std_errors[0][i]) << r.x0_names[i];
+    std::printf("  x0 %s: %.5f +- %.5f (truth %.1f, start %.1f)\n", r.x0_names[i].c_str(),
+                r.x0[0][i], r.x0_std_errors[0][i], truth[i], spec.x0[i]);
+  }
+  FilterSpec at_truth = spec;
+  at_truth.x0 = {1.2, 0.0};
+  TunerOptions plain = options;
+  plain.estimate_x0.clear();
+  const InnovationLikelihood<P, P::Angle> lik(at_truth, plain, data);
+  const double theta_true[4] = {std::log(kQc), std::log(kR), std::log(kL), kB};
+  EXPECT_LE(r.nll_tuned, NegLogLikelihood(lik, theta_true) + 1e-9);
+}
+
+TEST(InitialStateParams, BadNamesAndEstimatorsAreRefused) {
+  const std::vector<FilterData> data = {PendulumData(13, 50)};
+  auto error = [&](TunerOptions o) {
+    return testing::ErrorText([&] { InnovationLikelihood<P, P::Angle> lik(Spec(EkfOptions{}), o, data); });
+  };
+  TunerOptions o = Options({});
+  o.estimate_x0 = {"phi"};
+  EXPECT_NE(error(o).find("--estimate-x0: 'phi' is not a state of model 'pendulum' (theta, omega)"),
+            std::string::npos)
+      << error(o);
+  o.estimate_x0 = {"theta", "theta"};
+  EXPECT_NE(error(o).find("'theta' is named twice"), std::string::npos);
+  o.estimate_x0 = {"theta"};
+  o.x0_per_file = true;  // one dataset
+  EXPECT_NE(error(o).find("--x0-per-file needs two --data files or more"), std::string::npos);
+  std::string why;
+  o.x0_per_file = false;
+  o.estimator = Estimator::kEm;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "--estimate-x0 applies to the ml and output-error estimators, not em");
+  EXPECT_EQ(ParseEstimatedStates(" theta , omega"), (std::vector<std::string>{"theta", "omega"}));
+  EXPECT_THROW(ParseEstimatedStates("theta,,omega"), InputError);
 }
 
 }  // namespace

@@ -20,7 +20,9 @@
 #include <Eigen/Eigenvalues>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -580,6 +582,87 @@ TEST(BoundedLbfgs, StepsOnAQuadraticMeetTheCurvatureCondition) {
   ASSERT_FALSE(ratios.empty());
   for (size_t k = 0; k < ratios.size(); ++k) EXPECT_LE(ratios[k], 0.5 + 1e-9) << "step " << k + 1;
   for (size_t i = 0; i < n; ++i) EXPECT_NEAR(x[i], 0.0, 1e-9) << i;
+}
+
+TEST(BoundedLbfgs, StopsWithinRoundingButNotOnAGradientThatDoesNotMatchF) {
+  // f = C + 1/2 sum_i h_i x_i^2 with C = 3000 and curvatures 1 .. 1e8, every
+  // tolerance 0: the iteration runs until no step decreases f in double
+  // (step 5 of bounded_lbfgs.cpp). That is a minimum within rounding:
+  // converged, f - C far below the start's 51. With the second gradient
+  // component of the wrong sign the same stop must not read as converged.
+  const std::vector<double> h = {1e8, 1e4, 1.0};
+  const double C = 3000.0;
+  auto objective = [&](double sign) {
+    return [&h, C, sign](const double* x, double* v, double* g) {
+      *v = C;
+      for (size_t i = 0; i < h.size(); ++i) {
+        *v += 0.5 * h[i] * x[i] * x[i];
+        if (g) g[i] = (i == 1 ? sign : 1.0) * h[i] * x[i];
+      }
+      return true;
+    };
+  };
+  BoundedLbfgsOptions o;
+  o.function_tolerance = o.gradient_tolerance = o.parameter_tolerance = 0.0;
+  o.max_iterations = 5000;
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> lower(3, -inf), upper(3, inf), start = {1e-3, 1e-2, 1.0};
+  std::vector<double> x = start;
+  const BoundedLbfgsSummary right = MinimizeBounded(objective(1.0), lower, upper, o, &x, nullptr);
+  std::printf("  matching gradient: %s (%d iterations), f - C = %.3g\n", right.message.c_str(),
+              right.iterations, right.final_cost - C);
+  EXPECT_TRUE(right.converged) << right.message;
+  EXPECT_NE(right.message.find("within rounding"), std::string::npos) << right.message;
+  EXPECT_LE(right.final_cost - C, 1e-6);
+  // A gradient as an NLL's is, rounded: the stiffest component off by up to
+  // 1e-2 (a deterministic function of x), which moves its zero by 1e-10 and
+  // f by 5e-13, the rounding of C. |pg| then never falls below ~1e-2, so only
+  // the curvature read from the failed trials can tell this is a minimum.
+  auto rounded = [&h, C](const double* x, double* v, double* g) {
+    *v = C;
+    for (size_t i = 0; i < h.size(); ++i) {
+      *v += 0.5 * h[i] * x[i] * x[i];
+      if (g) g[i] = h[i] * x[i];
+    }
+    if (g) {
+      uint64_t bits = 0;
+      std::memcpy(&bits, &x[0], sizeof bits);
+      g[0] += 1e-2 * (double((bits * 0x9E3779B97F4A7C15ull) >> 11) / 9007199254740992.0 * 2 - 1);
+    }
+    return true;
+  };
+  x = start;
+  const BoundedLbfgsSummary noisy = MinimizeBounded(rounded, lower, upper, o, &x, nullptr);
+  std::printf("  rounded gradient: %s (%d iterations), f - C = %.3g\n", noisy.message.c_str(),
+              noisy.iterations, noisy.final_cost - C);
+  EXPECT_TRUE(noisy.converged) << noisy.message;
+  EXPECT_NE(noisy.message.find("by its curvature"), std::string::npos) << noisy.message;
+  EXPECT_LE(noisy.final_cost - C, 1e-6);
+  x = start;
+  const BoundedLbfgsSummary wrong = MinimizeBounded(objective(-1.0), lower, upper, o, &x, nullptr);
+  std::printf("  wrong-sign gradient: %s\n", wrong.message.c_str());
+  EXPECT_FALSE(wrong.converged) << wrong.message;
+}
+
+TEST(TuneVerdictRules, ANonFiniteHessianIsUnverifiedNotConverged) {
+  // The filter failed within a finite-difference step of the end point, so
+  // FinishTune's Hessian is NaN: nothing verifies a minimum there.
+  TuneResult r;
+  r.status = TuneStatus::kConverged;
+  r.names = {"log q", "x0 h2"};
+  r.is_log = {true, false};
+  r.theta = {-5.0, -3e-6};
+  r.at_bound = {false, false};
+  r.nll_initial = 10.0;
+  r.nll_tuned = 9.0;
+  const Eigen::MatrixXd H =
+      Eigen::MatrixXd::Constant(2, 2, std::numeric_limits<double>::quiet_NaN());
+  const NllAt nll = [](const std::vector<double>& x) { return 9.0 + x[0] * x[0]; };
+  ApplyVerdict(H, {true, false}, {-20.0, -1.0}, {20.0, 1.0}, nll, &r);
+  EXPECT_EQ(r.status, TuneStatus::kUnverified);
+  EXPECT_STREQ(TuneStatusName(r.status), "unverified");
+  EXPECT_FALSE(r.IsConverged());
+  EXPECT_NE(r.message.find("cannot be verified as a minimum"), std::string::npos) << r.message;
 }
 
 TEST(TuneVerdictRules, WorseThanStartAndAtBoundAreFailures) {
