@@ -191,7 +191,13 @@ TEST(TwoTanks, OutputErrorWithX0CoversTheTruthInFiftyDataSets) {
 }
 
 TEST(TwoTanks, PredictionErrorWithX0CoversTheTruthInFiftyDataSets) {
-  ExpectCoverageInFiftySets(&PemFit, "nll_tuned", "nll_initial", "prediction error");
+  // Levenberg-Marquardt (--solver least-squares): from this guess the
+  // projected L-BFGS stops at a saddle on some data sets, which it reports
+  // as not-a-minimum (exit 1), not as converged.
+  auto lm = [](const std::string& data, const std::string& start, const std::string& extra) {
+    return PemFit(data, start, "--solver least-squares " + extra);
+  };
+  ExpectCoverageInFiftySets(+lm, "nll_tuned", "nll_initial", "prediction error");
 }
 
 // Three experiments from other initial levels (one 80 mm below the common
