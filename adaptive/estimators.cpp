@@ -84,8 +84,7 @@ const EstimatorInfo& InfoOf(Estimator estimator) {
 
 const char* EstimatorName(Estimator estimator) { return InfoOf(estimator).name; }
 
-std::string EstimatorNames(const std::string& joiner, const std::string& last,
-                           bool studies_only) {
+std::string EstimatorNames(const std::string& joiner, const std::string& last, bool studies_only) {
   std::vector<std::string> names;
   for (const EstimatorInfo& e : kEstimators)
     if (!studies_only || e.in_studies) names.push_back(e.name);

@@ -151,8 +151,7 @@ void SetInput(const po::variables_map& vm, const ModelEntry& model, SimulationSp
     return;
   }
   spec->times = OutputTimes(*spec);
-  if (const std::string why = signal.Covers(spec->times.front(), spec->times.back());
-      !why.empty())
+  if (const std::string why = signal.Covers(spec->times.front(), spec->times.back()); !why.empty())
     throw InputError("--input: " + why);
   for (double t : spec->times) spec->inputs.push_back(signal.At(t));
   spec->input_column = model.input_name;
@@ -313,8 +312,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   WriteCsv(csv.stream(), result.columns, result.rows);
   sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
-                                  method_name,
-                                  vm.count("data") ? vm["data"].as<std::string>() : "",
+                                  method_name, vm.count("data") ? vm["data"].as<std::string>() : "",
                                   Trim(vm["input"].as<std::string>()));
   csv.Finish();  // both written before either is in place: both or neither
   sidecar.Finish();
@@ -349,8 +347,8 @@ int RunSimulate(const std::vector<std::string>& args) {
               << "\n"
               << "output steps     " << result.steps
               << (!vm.count("data") ? "  (t = 0 .. " + FormatNumber(spec.t_end) +
-                                           ", dt = " + FormatNumber(spec.dt) + ")"
-                                     : "  (the times of " + vm["data"].as<std::string>() + ")")
+                                          ", dt = " + FormatNumber(spec.dt) + ")"
+                                    : "  (the times of " + vm["data"].as<std::string>() + ")")
               << "\n"
               << "rhs evaluations  " << result.stats.rhs_evals << "\n"
               << "internal steps   " << result.stats.internal_steps << "\n"

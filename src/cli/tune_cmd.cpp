@@ -328,9 +328,8 @@ X0Report TunedX0(const ModelEntry& model, const TuneResult& r,
 }
 
 void PrintHuman(const ModelEntry& model, const FilterSpec& spec, const TuneResult& r,
-                const std::vector<FilterData>& datasets,
-                const std::vector<Validation>& validations, double horizon,
-                const std::string& out_path) {
+                const std::vector<FilterData>& datasets, const std::vector<Validation>& validations,
+                double horizon, const std::string& out_path) {
   const int n = int(model.states.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   std::cout << std::setprecision(6);
@@ -575,8 +574,8 @@ bool PlotTuned(const po::variables_map& vm, const ModelEntry& model, const Filte
   if (run.summary.x0.size() == model.states.size()) {
     sim = WholeRecordSimulation(model, tuned, data, run.summary.x0);
     plot.simulation = sim.ok ? &sim : nullptr;
-    plot.sim_what = "free simulation on " + std::filesystem::path(path).filename().string() +
-                    " from x0 = (";
+    plot.sim_what =
+        "free simulation on " + std::filesystem::path(path).filename().string() + " from x0 = (";
     for (size_t i = 0; i < model.states.size(); ++i)
       plot.sim_what += (i ? ", " : "") + model.states[i] + " = " + FormatNumber(run.summary.x0[i]);
     plot.sim_what += ")";
@@ -706,8 +705,8 @@ int RunTune(const std::vector<std::string>& args) {
     throw InputError("--profile-out needs --profile");
   }
   auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
-  TunerOptions options = BuildTunerOptions(TunerSettingsFromVariablesMap(vm), GuessKey(vm, "q"),
-                                           GuessKey(vm, "r"));
+  TunerOptions options =
+      BuildTunerOptions(TunerSettingsFromVariablesMap(vm), GuessKey(vm, "q"), GuessKey(vm, "r"));
   const EstimatorInfo& estimator = InfoOf(options.estimator);
   // Output error simulates: a model file needs no tuner compiled for it.
   const bool output_error = !estimator.tuner;
@@ -802,12 +801,11 @@ int RunTune(const std::vector<std::string>& args) {
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << ResultJson(model, spec, result, datasets, validations, write_out ? out_path : "", profile,
-                            profile_files)
+    std::cout << ResultJson(model, spec, result, datasets, validations, write_out ? out_path : "",
+                            profile, profile_files)
               << "\n";
   } else {
-    PrintHuman(model, spec, result, datasets, validations, horizon,
-               write_out ? out_path : "");
+    PrintHuman(model, spec, result, datasets, validations, horizon, write_out ? out_path : "");
     if (profile) PrintProfile(*profile, profile_files, profile_message);
   }
   if (!result.IsConverged()) {

@@ -19,8 +19,8 @@ const char* StatusName(const OutputErrorResult& r) {
 X0Report FitX0(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,
                const std::vector<FilterData>& runs) {
   return MakeX0Report(model.states, r.x0_names,
-                      std::vector<std::vector<double>>(r.x0.size(), spec.x0), r.x0,
-                      r.x0_std_errors, runs);
+                      std::vector<std::vector<double>>(r.x0.size(), spec.x0), r.x0, r.x0_std_errors,
+                      runs);
 }
 
 void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const OutputErrorResult& r,

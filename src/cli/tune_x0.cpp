@@ -21,8 +21,7 @@ std::vector<double> Estimated(const X0Report& r, const std::vector<double>& row)
 
 }  // namespace
 
-X0Report MakeX0Report(const std::vector<std::string>& states,
-                      const std::vector<std::string>& names,
+X0Report MakeX0Report(const std::vector<std::string>& states, const std::vector<std::string>& names,
                       const std::vector<std::vector<double>>& initial,
                       const std::vector<std::vector<double>>& x0,
                       const std::vector<std::vector<double>>& std_errors,

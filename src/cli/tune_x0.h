@@ -30,8 +30,7 @@ struct X0Report {
 };
 
 // The report of a fit's rows; the paths from the --data files.
-X0Report MakeX0Report(const std::vector<std::string>& states,
-                      const std::vector<std::string>& names,
+X0Report MakeX0Report(const std::vector<std::string>& states, const std::vector<std::string>& names,
                       const std::vector<std::vector<double>>& initial,
                       const std::vector<std::vector<double>>& x0,
                       const std::vector<std::vector<double>>& std_errors,

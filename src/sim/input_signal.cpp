@@ -29,11 +29,11 @@ double Reached(double t) { return t + 1e-9 * std::max(1.0, std::abs(t)); }
 // 2^order - 1 nonzero states.
 const std::map<int, std::vector<int>>& PrimitiveTaps() {
   static const std::map<int, std::vector<int>> taps = {
-      {2, {2, 1}},          {3, {3, 2}},          {4, {4, 3}},          {5, {5, 3}},
-      {6, {6, 5}},          {7, {7, 6}},          {8, {8, 6, 5, 4}},    {9, {9, 5}},
-      {10, {10, 7}},        {11, {11, 9}},        {12, {12, 6, 4, 1}},  {13, {13, 4, 3, 1}},
-      {14, {14, 5, 3, 1}},  {15, {15, 14}},       {16, {16, 15, 13, 4}}, {17, {17, 14}},
-      {18, {18, 11}},       {19, {19, 6, 2, 1}},  {20, {20, 17}}};
+      {2, {2, 1}},         {3, {3, 2}},         {4, {4, 3}},           {5, {5, 3}},
+      {6, {6, 5}},         {7, {7, 6}},         {8, {8, 6, 5, 4}},     {9, {9, 5}},
+      {10, {10, 7}},       {11, {11, 9}},       {12, {12, 6, 4, 1}},   {13, {13, 4, 3, 1}},
+      {14, {14, 5, 3, 1}}, {15, {15, 14}},      {16, {16, 15, 13, 4}}, {17, {17, 14}},
+      {18, {18, 11}},      {19, {19, 6, 2, 1}}, {20, {20, 17}}};
   return taps;
 }
 
@@ -74,8 +74,8 @@ std::map<std::string, std::string> KeyValues(const std::vector<std::string>& arg
   return kv;
 }
 
-double Number(const std::map<std::string, std::string>& kv, const std::string& key,
-              double fallback, const std::string& where, bool required = false) {
+double Number(const std::map<std::string, std::string>& kv, const std::string& key, double fallback,
+              const std::string& where, bool required = false) {
   const auto it = kv.find(key);
   if (it == kv.end()) {
     if (required) throw InputError(where + ": '" + key + "=' is required");
@@ -117,8 +117,8 @@ InputSignal Multisine(const std::vector<std::string>& args, const std::string& w
   const double f1 = ParseNumber(band->second.substr(0, colon), where + " band");
   const double f2 = ParseNumber(band->second.substr(colon + 1), where + " band");
   if (!(f1 > 0 && (sines == 1 ? f2 >= f1 : f2 > f1)))
-    throw InputError(where + " band: expected 0 < f1 " + (sines == 1 ? "<=" : "<") +
-                     " f2, got '" + band->second + "'");
+    throw InputError(where + " band: expected 0 < f1 " + (sines == 1 ? "<=" : "<") + " f2, got '" +
+                     band->second + "'");
   Rng rng(DeriveSeed({uint64_t(seed), 0x6D756C7469ull}));  // "multi"
   for (int i = 0; i < sines; ++i) {
     s.freqs.push_back(sines == 1 ? f1 : f1 + (f2 - f1) * double(i) / double(sines - 1));
@@ -165,14 +165,14 @@ InputSignal Recorded(const std::vector<std::string>& args, const std::string& wh
   InputSignal s;
   s.kind = InputSignal::kRecorded;
   const std::filesystem::path path(args[0]);
-  s.path = path.is_absolute() || base_dir.empty() ? path.string()
-                                                  : (std::filesystem::path(base_dir) / path).string();
+  s.path = path.is_absolute() || base_dir.empty()
+               ? path.string()
+               : (std::filesystem::path(base_dir) / path).string();
   const CsvTable table = ReadCsv(s.path);
   const std::string column = args.size() == 2 ? args[1] : "u";
   const int t_col = table.ColumnIndex("t"), u_col = table.ColumnIndex(column);
   if (t_col < 0 || u_col < 0)
-    throw InputError(where + ": " + s.path + " has no '" + (t_col < 0 ? "t" : column) +
-                     "' column");
+    throw InputError(where + ": " + s.path + " has no '" + (t_col < 0 ? "t" : column) + "' column");
   for (size_t i = 0; i < table.rows.size(); ++i) {
     const double t = table.rows[i][size_t(t_col)], u = table.rows[i][size_t(u_col)];
     const std::string at = s.path + ":" + std::to_string(table.line_numbers[i]);
