@@ -46,13 +46,17 @@ install: build
 test: deps build
 	ctest --test-dir $(BUILD) --output-on-failure -j$(JOBS)
 
-# Address and undefined-behaviour sanitizers over the unit tests.
+# Address and undefined-behaviour sanitizers over the unit tests, less three
+# statistical checks that repeat, 50 or 200 times over, code the other unit
+# tests run under the sanitizer: 640-900 s each there (stop 47, ctest
+# timings), a third of the run; `make test` runs them.
+ASAN_SKIP := AlsOdelson.RecoversQAndRWithinThreeMonteCarloStandardErrors|EmLinear.DiagonalQAndCorrelatedFullR|TunerVerdict.TwoHundredRandomStartsStayAdmissibleAndHonest
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Asan -DCMAKE_CXX_FLAGS_ASAN="-O1 -g1" \
 	  -DESTLAB_WERROR=ON -DESTLAB_SANITIZE=ON
 	cmake --build $(ASAN_BUILD) -j$(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -L unit
+	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -L unit -E '$(ASAN_SKIP)'
 
 # A study through a real Slurm (issue 17): a one-node cluster on this machine
 # (Debian's slurm-wlm and munge, installed when missing; daemons started and

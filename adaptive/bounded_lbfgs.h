@@ -63,8 +63,8 @@ struct BoundedLbfgsSummary {
 using BoundedObjective = std::function<bool(const double* x, double* value, double* gradient)>;
 // Called after every accepted step with its number (1, 2, ...), the new
 // point, the value there and the change from the previous one (negative).
-using BoundedIterationCallback = std::function<void(int iteration, const std::vector<double>& x,
-                                                    double value, double change)>;
+using BoundedIterationCallback =
+    std::function<void(int iteration, const std::vector<double>& x, double value, double change)>;
 
 // Minimises f over the box from *x (clamped into the box first). lower and
 // upper may hold +-infinity; lower <= upper.

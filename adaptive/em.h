@@ -31,7 +31,17 @@
 //             fixed        unchanged
 //           (the same for R with B_k).
 // The transition from the prior to the first row (spec.t0 before it) is not
-// in the M-step: x0 and P0 are not re-estimated.
+// in the M-step, and P0 is not re-estimated.
+//
+// Initial states (--estimate-x0, TunerOptions::estimate_x0): with the prior
+// x(t_0) ~ N(mu, P0) at the first row, the x0 term of the expected
+// complete-data log-likelihood is -1/2 E[(x_0 - mu)^T P0^-1 (x_0 - mu)];
+// over the estimated entries S of mu (the others, S', held), with
+// L = P0^-1 and x^s_0 the smoothed first row,
+//   mu_S = x^s_0,S + L_SS^-1 L_SS' (x^s_0,S' - mu_S')   (= x^s_0,S for a diagonal P0),
+// averaged over the datasets for a shared x0, each dataset's own with
+// --x0-per-file (Shumway & Stoffer 1982, eq. 13). The E-step runs each
+// dataset from its own mu. The prior must sit at the first row's time.
 //
 // Monitoring: after every M-step the exact innovation NLL (the ML tuner's
 // objective, adaptive/likelihood.h) is evaluated. On a linear model with
@@ -67,12 +77,13 @@ namespace em_internal {
 // The M-step's sums over every dataset.
 template <int N, int M>
 struct EmSums {
-  Mat<N, N> a = Mat<N, N>::Zero();  // sum_k A_k
-  long transitions = 0;             // K
-  double white = 0.0;               // sum_k tr(W_k^-1 A_k) on the paired states
-  long white_dims = 0;              // n_w K
-  Mat<M, M> b = Mat<M, M>::Zero();  // sum_k B_k
-  long measurements = 0;            // K_z
+  Mat<N, N> a = Mat<N, N>::Zero();    // sum_k A_k
+  long transitions = 0;               // K
+  double white = 0.0;                 // sum_k tr(W_k^-1 A_k) on the paired states
+  long white_dims = 0;                // n_w K
+  Mat<M, M> b = Mat<M, M>::Zero();    // sum_k B_k
+  long measurements = 0;              // K_z
+  std::vector<Vec<double, N>> first;  // x^s_0 of each dataset
 };
 
 // Cubature points of N(mean, cov): the rule's own DrawSigmaPoints, with a
@@ -144,11 +155,12 @@ bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPoi
   return true;
 }
 
-// The E-step over every dataset at `spec`'s Q and R. False with *why.
+// The E-step over every dataset at theta's Q, R and x0 (`spec` = SpecAt
+// theta). False with *why.
 template <class Model, class Meas>
 bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
-           const std::vector<FilterData>& datasets, EmSums<Model::kStateDim, Meas::kDim>* sums,
-           std::string* why) {
+           const double* theta, const std::vector<FilterData>& datasets,
+           EmSums<Model::kStateDim, Meas::kDim>* sums, std::string* why) {
   constexpr int N = Model::kStateDim;
   SigmaPointOptions cubature;
   cubature.rule = SigmaRule::kCubature;
@@ -157,12 +169,19 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
   FilterSpec smooth = spec;
   smooth.smooth = true;
   std::vector<SmoothedMoments<N>> rows;
-  for (const FilterData& d : datasets) {
+  for (size_t set = 0; set < datasets.size(); ++set) {
+    const FilterData& d = datasets[set];
+    if (!lik.initial_states().empty()) {  // this dataset's prior mean
+      const Vec<double, N> x0 = lik.PriorMeanAt(theta, set);
+      smooth.x0.assign(x0.data(), x0.data() + N);
+      smooth.x0_first_sample = false;
+    }
     const FilterRunOutput out = RunFilterWith<Model, Meas>(smooth, d, &rows);
     if (!out.summary.ok) {
       *why = out.summary.message;
       return false;
     }
+    if (!rows.empty()) sums->first.push_back(rows.front().x);
     const std::string where = d.path.empty() ? "" : " of " + d.path;
     const bool complete = ForEachStep<Meas::kDim>(
         spec, d,
@@ -211,12 +230,41 @@ InitialCovariance<D> MStep(NoiseParam kind, const Mat<D, D>& sum, long count, do
   return next;
 }
 
-// theta of Q and R after one M-step; throws InputError when a matrix is
-// not positive definite (the parameterisation has no theta for it).
+// The x0 rows of theta after one M-step (see the header comment), appended
+// to *next; p0 is the prior covariance.
+template <class Model, class Meas>
+void MStepX0(const InnovationLikelihood<Model, Meas>& lik, const double* theta,
+             const EmSums<Model::kStateDim, Meas::kDim>& sums,
+             const Mat<Model::kStateDim, Model::kStateDim>& p0, std::vector<double>* next) {
+  constexpr int N = Model::kStateDim;
+  const InitialStates& x0s = lik.initial_states();
+  const Mat<N, N> L = p0.inverse();
+  std::vector<bool> estimated(N, false);
+  for (int i : x0s.index) estimated[size_t(i)] = true;
+  const auto k = Eigen::Index(x0s.index.size());
+  Eigen::MatrixXd l_ss(k, k), l_sh(k, N);  // L_SS and L_SS' (zero columns on S)
+  for (Eigen::Index a = 0; a < k; ++a) {
+    for (Eigen::Index b = 0; b < k; ++b) l_ss(a, b) = L(x0s.index[a], x0s.index[b]);
+    for (int j = 0; j < N; ++j) l_sh(a, j) = estimated[size_t(j)] ? 0.0 : L(x0s.index[a], j);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> solve(l_ss);
+  std::vector<Eigen::VectorXd> rows(size_t(x0s.rows), Eigen::VectorXd::Zero(k));
+  for (size_t set = 0; set < sums.first.size(); ++set) {
+    const Vec<double, N> held = sums.first[set] - lik.PriorMeanAt(theta, set);  // S' entries
+    Eigen::VectorXd mu = solve.solve(l_sh * held);
+    for (Eigen::Index a = 0; a < k; ++a) mu(a) += sums.first[set](x0s.index[a]);
+    rows[size_t(x0s.RowOf(set))] += mu / double(x0s.rows > 1 ? 1 : sums.first.size());
+  }
+  for (const Eigen::VectorXd& row : rows) next->insert(next->end(), row.data(), row.data() + k);
+}
+
+// theta of Q, R (and x0) after one M-step; throws InputError when a matrix
+// is not positive definite (the parameterisation has no theta for it).
 template <class Model, class Meas>
 std::vector<double> MStepTheta(const InnovationLikelihood<Model, Meas>& lik,
                                const std::vector<double>& theta,
-                               const EmSums<Model::kStateDim, Meas::kDim>& sums) {
+                               const EmSums<Model::kStateDim, Meas::kDim>& sums,
+                               const Mat<Model::kStateDim, Model::kStateDim>& p0) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const auto& qp = lik.q_param();
@@ -237,6 +285,7 @@ std::vector<double> MStepTheta(const InnovationLikelihood<Model, Meas>& lik,
   std::vector<double> next = q_next.InitialTheta();
   const std::vector<double>& r = r_next.InitialTheta();
   next.insert(next.end(), r.begin(), r.end());
+  if (!lik.initial_states().empty()) MStepX0(lik, theta.data(), sums, p0, &next);
   return next;
 }
 
@@ -255,6 +304,8 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
   using namespace em_internal;
   using Clock = std::chrono::steady_clock;
   TuneResult& result = *out;
+  const Mat<Model::kStateDim, Model::kStateDim> p0 =
+      likelihood_internal::InitialFromVector<Model::kStateDim>(spec.p0, "P0").matrix;
   std::vector<double> theta = result.theta_initial;
   double nll = result.nll_initial;
   start->theta_end = theta, start->nll_end = nll;
@@ -265,8 +316,8 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
     EmSums<Model::kStateDim, Meas::kDim> sums;
     std::vector<double> next;
     try {
-      if (!EStep(lik, SpecAt(lik, spec, theta.data()), datasets, &sums, why)) break;
-      next = MStepTheta(lik, theta, sums);
+      if (!EStep(lik, SpecAt(lik, spec, theta.data()), theta.data(), datasets, &sums, why)) break;
+      next = MStepTheta(lik, theta, sums, p0);
     } catch (const std::exception& e) {  // InputError from the M-step, NumericalError
       *why = std::string("M-step: ") + e.what();
       break;
@@ -300,6 +351,13 @@ void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, 
   const std::vector<double>&lower = problem.lower, &upper = problem.upper;
   const InnovationLikelihood<Model, Meas>& lik = objective.likelihood();
   TuneResult& result = *out;
+  if (!lik.initial_states().empty() && spec.has_t0)  // x^s_0 must be x(t_0)
+    for (const FilterData& d : problem.datasets)
+      if (!d.t.empty() && d.t.front() > spec.t0)
+        throw InputError(
+            "--estimate-x0 with the em estimator needs the prior at the first row (t0 " +
+            FormatNumber(spec.t0) + " is before the first row" +
+            (d.path.empty() ? "" : " of " + d.path) + ", t = " + FormatNumber(d.t.front()) + ")");
   TuneStart start;
   start.theta_start = result.theta_initial;
   start.nll_start = result.nll_initial;

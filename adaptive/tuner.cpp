@@ -1,6 +1,8 @@
 #include "adaptive/tuner.h"
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "src/core/types.h"
 
@@ -89,9 +91,12 @@ bool TunerOptions::IsValid(std::string* error) const {
     return fail("the " + name +
                 " estimator estimates Q and R only; physical parameters need the ml estimator");
   if (!e.x0 && (!estimate_x0.empty() || x0_per_file)) {
-    std::string with_x0;
+    std::vector<std::string> takers;
     for (const EstimatorInfo& other : Estimators())
-      if (other.x0) with_x0 += (with_x0.empty() ? "" : " and ") + std::string(other.name);
+      if (other.x0) takers.push_back(other.name);
+    std::string with_x0;
+    for (size_t i = 0; i < takers.size(); ++i)
+      with_x0 += (i == 0 ? "" : i + 1 == takers.size() ? " and " : ", ") + takers[i];
     return fail(std::string(estimate_x0.empty() ? "--x0-per-file" : "--estimate-x0") +
                 " applies to the " + with_x0 + " estimators, not " + name);
   }

@@ -27,8 +27,8 @@ namespace tuner_internal {
 // when the filter fails within a step of theta.
 template <class Model, class Meas>
 bool ObservedFisher(const Objective<Model, Meas>& objective, const std::vector<double>& theta,
-                    double step, const std::vector<double>& lower,
-                    const std::vector<double>& upper, Eigen::MatrixXd* fisher) {
+                    double step, const std::vector<double>& lower, const std::vector<double>& upper,
+                    Eigen::MatrixXd* fisher) {
   const int k = objective.NumParams();
   Eigen::MatrixXd& H = *fisher;
   H.setZero(k, k);

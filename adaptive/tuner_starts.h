@@ -192,9 +192,9 @@ void ParameterFacts(const InnovationLikelihood<Model, Meas>& lik, const TunerOpt
       const int j = i - noise;
       const EstimatedParam& e = phys.estimated()[j];
       user_box = !std::isnan(e.lower) && !std::isnan(e.upper);
-      natural = natural || (Model::kParams[phys.ModelIndex(j)].constraint ==
-                                Constraint::kNonNegative &&
-                            lower[i] == 0.0);
+      natural =
+          natural || (Model::kParams[phys.ModelIndex(j)].constraint == Constraint::kNonNegative &&
+                      lower[i] == 0.0);
     }
     spread->push_back(
         SpreadInterval(o, theta0[i], is_log[i], i >= noise, user_box, lower[i], upper[i]));
@@ -220,10 +220,10 @@ TuneStart RunStart(const Objective<Model, Meas>& objective, const TunerOptions& 
     from = ScaleShifted(from, is_log, noise, shift);
   }
   bool converged = false;
-  TuneStart st = o.solver == MlSolver::kLbfgs
-                     ? RunLbfgs(objective, o, lower, upper, from, &converged, where)
-                     : RunLeastSquares(objective, o, lower, upper, from, Meas::kDim, &converged,
-                                       where);
+  TuneStart st =
+      o.solver == MlSolver::kLbfgs
+          ? RunLbfgs(objective, o, lower, upper, from, &converged, where)
+          : RunLeastSquares(objective, o, lower, upper, from, Meas::kDim, &converged, where);
   st.theta_start = point;
   st.theta_scaled = from;
   st.nll_start = nll_start;
@@ -266,10 +266,7 @@ void RunStarts(const Objective<Model, Meas>& objective, const FilterSpec& spec,
       }
       const Objective<Model, Meas>& obj = w > 0 ? *own_objective : objective;
       for (int s; (s = next++) < n;) {
-        const TuneProgress where{.phase = "start",
-                                 .start = s + 1,
-                                 .starts = n,
-                                 .objective = "NLL"};
+        const TuneProgress where{.phase = "start", .start = s + 1, .starts = n, .objective = "NLL"};
         (*starts)[s] = RunStart(obj, o, points[s], lower, upper, where);
       }
     } catch (...) {

@@ -99,8 +99,10 @@ output-error they are where the free simulation starts. One x0 is shared by
 every --data file, or with --x0-per-file each file has its own while the
 parameters and the noise are shared. The report, --json ("tuned": {"x0":
 ...}, "x0_std_errors", or "x0_per_file") and tuned.ini (x0 and p0 lines that
-simulate, filter and smooth --config read) give x0 with standard errors. EM
-and ALS do not estimate x0.
+simulate, filter and smooth --config read) give x0 with standard errors.
+With em, x0 is the prior mean too, re-estimated in each M-step from the
+smoothed first row (the prior must sit at the first row); ALS does not
+estimate x0.
 
 Tuning: minimises NLL = 1/2 sum_k [log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi]
 over the innovations nu_k (covariance S_k) of every dataset after --burn-in
@@ -653,9 +655,9 @@ int RunTune(const std::vector<std::string>& args) {
       "param-prior", po::value<std::string>(),
       "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
       "estimate-x0", po::value<std::string>(),
-      "also estimate these initial states (NAME,NAME...; initial values from --x0): ml, the "
-      "filter's prior mean (its covariance stays --p0-diag); output-error, the start of the "
-      "simulation over the whole record")(
+      "also estimate these initial states (NAME,NAME...; initial values from --x0): ml and em, "
+      "the filter's prior mean (its covariance stays --p0-diag); output-error, the start of "
+      "the simulation over the whole record")(
       "x0-per-file",
       "with --estimate-x0: each --data file its own initial state (the "
       "parameters shared)")(

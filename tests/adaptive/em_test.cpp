@@ -6,6 +6,10 @@
 //   * diagonal Q with a full (correlated) R on two axes: the same;
 //   * the pendulum with the EKF: EM's approximate E-step still lowers the
 //     NLL, and the L-BFGS tuner from EM's solution is reported beside it;
+//   * initial states (--estimate-x0) on the linear model with a correlated P0
+//     and one state held: EM's x0 M-step reaches the L-BFGS tuner's optimum
+//     in Q, R and x0 (shared over two datasets, and per file over three),
+//     the NLL never rising; the prior after the first row is refused;
 //   * options that EM does not take are refused.
 #include <gtest/gtest.h>
 
@@ -23,6 +27,7 @@
 #include "src/ode/transition_impl.h"  // MakeTransition for the test-only model
 #include "tests/adaptive/constant_velocity.h"
 #include "tests/adaptive/tuner_fixture.h"
+#include "tests/error_text.h"
 
 namespace estlab {
 namespace {
@@ -165,8 +170,9 @@ TEST(EmMoments, TypedMomentsAreTheSmoothFullCovColumns) {
       Simulate<P, P::Sin>(Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), 0.01, 200,
                           Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 9)};
   data[0].z[50] = std::numeric_limits<double>::quiet_NaN();  // a skipped sample
-  for (const FilterKindOptions& kind : {FilterKindOptions{EkfOptions{}},
-                                        FilterKindOptions{DefaultFilterOptions(FilterKind::kUkf)}}) {
+  for (const FilterKindOptions& kind :
+       {FilterKindOptions{EkfOptions{}},
+        FilterKindOptions{DefaultFilterOptions(FilterKind::kUkf)}}) {
     FilterSpec spec;
     spec.measurement = "sin";
     spec.filter = kind;
@@ -209,6 +215,95 @@ TEST(EmMoments, TypedMomentsAreTheSmoothFullCovColumns) {
       }
     }
   }
+}
+
+// The largest |EM - ml| of theta, relative for Q's and R's log parameters'
+// values and in units of ml's standard error for x0.
+double ThetaGap(const TuneResult& e, const TuneResult& m, int first_x0) {
+  double gap = 0.0;
+  for (size_t i = 0; i < m.theta.size(); ++i) {
+    const double d = std::abs(e.theta[i] - m.theta[i]);
+    gap = std::max(gap, int(i) < first_x0 ? d : d / m.std_errors[i]);
+  }
+  return gap;
+}
+
+// x0's M-step, mu_S = x^s_0,S + L_SS^-1 L_SS' (x^s_0,S' - mu_S'): with a
+// correlated P0 and v2 held at a wrong value the correction term matters,
+// so EM reaches the likelihood optimum only if it is right.
+TEST(EmLinear, InitialStatesReachTheLikelihoodTunersOptimum) {
+  const double dt = 0.1;
+  const Mat<4, 4> Q = WhiteAccel<Cv2>(0.5, dt);
+  const Mat<2, 2> R = Vec<double, 2>(0.04, 0.04).asDiagonal();
+  FilterSpec spec;
+  spec.measurement = "positions";
+  spec.filter = KfOptions{};
+  spec.transition.integrator = Integrator::kEuler;
+  spec.x0 = {0.0, 0.0, 0.0, 0.3};  // v2 held, not its truth
+  Mat<4, 4> P0;
+  P0 << 0.2, 0.06, 0.0, 0.08,  //
+      0.06, 0.2, 0.0, 0.0,     //
+      0.0, 0.0, 0.2, 0.04,     //
+      0.08, 0.0, 0.04, 0.2;
+  spec.p0.assign(P0.data(), P0.data() + 16);
+  spec.q_white_accel = true;
+  spec.qc = 2.0;
+  spec.r = {0.2, 0.0, 0.0, 0.2};
+  TunerOptions ml;
+  ml.q_param = NoiseParam::kWhiteAccel;
+  ml.r_param = NoiseParam::kDiag;
+  ml.estimate_x0 = {"p1", "v1", "p2"};
+  TunerOptions em = ml;
+  em.estimator = Estimator::kEm;
+  em.em_tolerance = 1e-13;
+  em.max_iterations = 20000;
+  const Vec<double, 4> truth[3] = {
+      {1.0, -0.5, 2.0, -0.5}, {-1.5, 0.8, 0.5, -0.5}, {0.4, 0.0, -2.0, -0.5}};
+  for (const bool per_file : {false, true}) {
+    std::vector<FilterData> data;
+    for (int d = 0; d < (per_file ? 3 : 2); ++d)
+      data.push_back(Simulate<Cv2, Cv2::Positions>(Integrator::kEuler, truth[per_file ? d : 0], dt,
+                                                   200, Q, R, DeriveSeed({57, uint64_t(d)})));
+    ml.x0_per_file = em.x0_per_file = per_file;
+    const TuneResult e = TuneWith<Cv2, Cv2::Positions>(spec, em, data);
+    const TuneResult m = TuneWith<Cv2, Cv2::Positions>(spec, ml, data);
+    ASSERT_EQ(e.status, TuneStatus::kConverged) << e.message << " " << e.termination;
+    ASSERT_EQ(m.status, TuneStatus::kConverged) << m.message;
+    ASSERT_EQ(e.theta.size(), m.theta.size());
+    ASSERT_EQ(e.x0.size(), per_file ? 3u : 1u);
+    EXPECT_EQ(e.nll_increases, 0);
+    EXPECT_LE(WorstRise(e.nll_history), 1e-11);
+    const double gap = ThetaGap(e, m, 3);
+    std::printf(
+        "  %s: %d EM iterations, NLL EM %.9f ml %.9f, largest gap %.3g "
+        "(log-parameters; x0 in ml's SE)\n",
+        per_file ? "x0 per file (3)" : "x0 shared (2 files)", e.iterations, e.nll_tuned,
+        m.nll_tuned, gap);
+    EXPECT_LT(gap, 1e-3);
+    EXPECT_LE(std::abs(e.nll_tuned - m.nll_tuned), 1e-7 * std::abs(m.nll_tuned));
+    for (size_t row = 0; row < e.x0.size(); ++row)
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(e.x0[row][i], e.theta[3 + 3 * row + i]);
+        EXPECT_LE(std::abs(e.x0[row][i] - truth[per_file ? row : 0](i)),
+                  4 * e.x0_std_errors[row][i])
+            << "row " << row << " " << e.x0_names[i];
+      }
+    EXPECT_EQ(e.x0[0][3], 0.3);  // held
+  }
+  // The prior before the first row: x^s_0 is not x(t_0).
+  std::vector<FilterData> data = {
+      Simulate<Cv2, Cv2::Positions>(Integrator::kEuler, truth[0], dt, 50, Q, R, 3)};
+  for (double& t : data[0].t) t += 0.5;
+  FilterSpec late = spec;
+  late.has_t0 = true;
+  late.t0 = 0.0;
+  em.x0_per_file = false;
+  const std::string error =
+      testing::ErrorText([&] { TuneWith<Cv2, Cv2::Positions>(late, em, data); });
+  EXPECT_NE(error.find("--estimate-x0 with the em estimator needs the prior at the first row (t0 0 "
+                       "is before the first row, t = 0.5)"),
+            std::string::npos)
+      << error;
 }
 
 TEST(EmInput, OptionsEmDoesNotTakeAreRefused) {

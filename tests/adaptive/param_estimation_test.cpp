@@ -420,9 +420,11 @@ TEST(InitialStateParams, BadNamesAndEstimatorsAreRefused) {
   EXPECT_NE(error(o).find("--x0-per-file needs two --data files or more"), std::string::npos);
   std::string why;
   o.x0_per_file = false;
-  o.estimator = Estimator::kEm;
+  o.estimator = Estimator::kAls;
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_EQ(why, "--estimate-x0 applies to the ml and output-error estimators, not em");
+  EXPECT_EQ(why, "--estimate-x0 applies to the ml, em and output-error estimators, not als");
+  o.estimator = Estimator::kEm;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
   EXPECT_EQ(ParseEstimatedStates(" theta , omega"), (std::vector<std::string>{"theta", "omega"}));
   EXPECT_THROW(ParseEstimatedStates("theta,,omega"), InputError);
 }

@@ -237,6 +237,20 @@ TEST_F(TuneCli, EmAndAlsEstimators) {
   const CmdResult text = Estlab(base + "--estimator em --tolerance 1e-6");
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("ml from EM's solution"), std::string::npos) << text.out;
+  // EM with the initial angle estimated (--x0 0.6, truth 0.785398): the
+  // same report, JSON and tuned.ini x0 and p0 lines as ml's.
+  const CmdResult x0 = Estlab(
+      "tune --model pendulum --measure sin --filter ekf --integrator rk4 --x0 theta=0.6 "
+      "--p0-diag 1e-2,1e-4 --data train.csv --init-q-diag 1e-4,1e-2 --init-r-diag 1 "
+      "--estimator em --tolerance 1e-7 --estimate-x0 theta --out tuned_em_x0.ini --json");
+  ASSERT_EQ(x0.exit_code, 0) << x0.err << x0.out;
+  const size_t at = x0.out.find("\"x0\": {\"theta\": ");
+  ASSERT_NE(at, std::string::npos) << x0.out;
+  const double theta0 = std::stod(x0.out.substr(at + 16));
+  EXPECT_NEAR(theta0, 0.785398, 0.05) << x0.out;
+  const std::string ini = Slurp(File("tuned_em_x0.ini"));
+  EXPECT_NE(ini.find("\nx0 = "), std::string::npos) << ini;
+  EXPECT_NE(ini.find("\np0"), std::string::npos) << ini;
   const CmdResult als = Estlab(base + "--estimator als --lags 8 --burn-in 50");
   ASSERT_EQ(als.exit_code, 0) << als.err << als.out;
   EXPECT_NE(als.out.find("ALS with 8 lag(s) identifies"), std::string::npos) << als.out;

@@ -269,8 +269,8 @@ TEST(TwoTanks, BadInputNamesTheValueAndWritesNothing) {
       {tune + "--estimator output-error --estimate-x0 h3", "--estimate-x0: 'h3' is not a state"},
       {tune + "--estimator output-error --estimate-x0 h1 --x0-per-file",
        "--x0-per-file needs two --data files"},
-      {tune + "--estimator em --estimate-x0 h1",
-       "--estimate-x0 applies to the ml and output-error estimators, not em"},
+      {tune + "--estimator als --estimate-x0 h1",
+       "--estimate-x0 applies to the ml, em and output-error estimators, not als"},
       {tune + "--estimate-x0 h3", "--estimate-x0: 'h3' is not a state"},
       {tune + "--estimate-x0 h1 --x0-per-file", "--x0-per-file needs two --data files"},
   };
