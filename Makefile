@@ -49,7 +49,7 @@ test: deps build
 # Address and undefined-behaviour sanitizers over the unit tests, less three
 # statistical checks that repeat, 50 or 200 times over, code the other unit
 # tests run under the sanitizer: 640-900 s each there (stop 47, ctest
-# timings), a third of the run; `make test` runs them.
+# timings), half of the run's test time; `make test` runs them.
 ASAN_SKIP := AlsOdelson.RecoversQAndRWithinThreeMonteCarloStandardErrors|EmLinear.DiagonalQAndCorrelatedFullR|TunerVerdict.TwoHundredRandomStartsStayAdmissibleAndHonest
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Asan -DCMAKE_CXX_FLAGS_ASAN="-O1 -g1" \

@@ -406,7 +406,8 @@ TEST(InitialStateParams, TunerRecoversTheInitialStateAndReportsIt) {
 TEST(InitialStateParams, BadNamesAndEstimatorsAreRefused) {
   const std::vector<FilterData> data = {PendulumData(13, 50)};
   auto error = [&](TunerOptions o) {
-    return testing::ErrorText([&] { InnovationLikelihood<P, P::Angle> lik(Spec(EkfOptions{}), o, data); });
+    return testing::ErrorText(
+        [&] { InnovationLikelihood<P, P::Angle> lik(Spec(EkfOptions{}), o, data); });
   };
   TunerOptions o = Options({});
   o.estimate_x0 = {"phi"};

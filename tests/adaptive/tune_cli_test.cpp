@@ -256,8 +256,8 @@ TEST_F(TuneCli, EmAndAlsEstimators) {
   EXPECT_NE(als.out.find("ALS with 8 lag(s) identifies"), std::string::npos) << als.out;
   for (const std::string& bad :
        {base + "--estimator em --burn-in 5", base + "--estimator em --starts 2",
-        base + "--estimator em --solver least-squares", base + "--tolerance 1e-6", base + "--lags 4",
-        base + "--estimator als --lags 0", base + "--estimator als --filter ukf",
+        base + "--estimator em --solver least-squares", base + "--tolerance 1e-6",
+        base + "--lags 4", base + "--estimator als --lags 0", base + "--estimator als --filter ukf",
         base + "--estimator nope"}) {
     const CmdResult r = Estlab(bad + " --out bad.ini");
     EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.err;

@@ -52,7 +52,8 @@ const double kTrueValue[] = {0.004, 0.03, 0.025};
 void ExpectFreeSimulationFigure(const TempDir& dir, double whole_rmse) {
   for (const char* ext : {".png", ".svg", ".gp", ".dat"})
     EXPECT_TRUE(dir.Exists(std::string("plots/free-simulation") + ext)) << ext;
-  const std::vector<std::string> lines = SplitLines(ReadFile(dir.File("plots/free-simulation.dat")));
+  const std::vector<std::string> lines =
+      SplitLines(ReadFile(dir.File("plots/free-simulation.dat")));
   ASSERT_GE(lines.size(), 2u);
   EXPECT_EQ(lines[0], "# t z_h2 sim_h2 err_h2");
   double sum = 0.0;
@@ -134,8 +135,8 @@ std::string Fit(const std::string& data, const std::string& start, const std::st
 // both orifices and the prior mean x0 estimated; P0 tiny, since the records
 // start exactly at x0.
 std::string PemFit(const std::string& data, const std::string& start, const std::string& extra) {
-  return "tune --model " + kModel + " " + data +
-         " --measure level --estimate-param k,a1,a2 " + start +
+  return "tune --model " + kModel + " " + data + " --measure level --estimate-param k,a1,a2 " +
+         start +
          " --estimate-x0 h1,h2 --integrator rk4 --substeps 4 --init-q-diag 1e-9,1e-9 "
          "--q-param fixed --init-r-diag 1e-6 --r-param fixed --p0-diag 1e-10,1e-10 "
          "--json " +
@@ -158,10 +159,10 @@ void ExpectCoverageInFiftySets(std::string (*fit)(const std::string&, const std:
     const RunResult r = Est(
         fit("--data d.csv", "--param k=0.003,a1=0.02,a2=0.02 --x0 h1=0.1,h2=0.1", ""), dir.path());
     ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
-    const RunResult at_truth = Est(fit("--data d.csv",
-                                       "--param k=0.004,a1=0.03,a2=0.025 --x0 h1=0.07,h2=0.10",
-                                       "--max-iterations 1"),
-                                   dir.path());
+    const RunResult at_truth =
+        Est(fit("--data d.csv", "--param k=0.004,a1=0.03,a2=0.025 --x0 h1=0.07,h2=0.10",
+                "--max-iterations 1"),
+            dir.path());
     const double value = JsonNumber(r.out, "", end), truth = JsonNumber(at_truth.out, "", start);
     ASSERT_TRUE(std::isfinite(value) && std::isfinite(truth)) << at_truth.out;
     not_worse += value <= truth + 1e-9 * std::abs(truth);
@@ -220,10 +221,9 @@ TEST(TwoTanks, ThreeExperimentsRecoverTheirOwnInitialStates) {
     }
     const std::string start = "--param k=0.003,a1=0.02,a2=0.02 --x0 h1=0.1,h2=0.1";
     for (int method = 0; method < 2; ++method) {
-      const RunResult fit = Est(
-          method ? PemFit(data, start, "--x0-per-file --solver least-squares")
-                 : Fit(data, start, "--x0-per-file"),
-          dir.path());
+      const RunResult fit = Est(method ? PemFit(data, start, "--x0-per-file --solver least-squares")
+                                       : Fit(data, start, "--x0-per-file"),
+                                dir.path());
       ASSERT_EQ(fit.exit_code, 0) << fit.err << fit.out;
       size_t at = fit.out.find("\"x0_per_file\"");
       ASSERT_NE(at, std::string::npos) << fit.out;
@@ -241,8 +241,8 @@ TEST(TwoTanks, ThreeExperimentsRecoverTheirOwnInitialStates) {
   }
   const char* method_name[] = {"output error", "prediction error"};
   for (int method = 0; method < 2; ++method) {
-    std::printf("  %s: per-file x0 within 2 SE: %d of %d\n", method_name[method],
-                covered[method], total[method]);
+    std::printf("  %s: per-file x0 within 2 SE: %d of %d\n", method_name[method], covered[method],
+                total[method]);
     EXPECT_GE(covered[method], int(std::ceil(0.9 * total[method]))) << method_name[method];
   }
 }
