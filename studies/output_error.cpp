@@ -51,18 +51,29 @@ SimulationResult SimulateRows(const ModelEntry& model, const FilterSpec& spec, c
   return model.simulate(s);
 }
 
+// The errors of a set of simulations (outputs fastest): a missing
+// measurement is a zero error that `observed` marks 0, so that it neither
+// moves the fit nor counts in an RMSE, a residual count or sigma.
+struct Errors {
+  std::vector<double> e;
+  std::vector<char> observed;
+  long Count() const { return long(std::count(observed.begin(), observed.end(), char(1))); }
+};
+
 // Appends the errors of rows [first + skip, first + count) of `d` against the
 // simulation `r` of rows [first, first + count) (outputs fastest).
 void AppendErrors(const MeasurementDesc& meas, const FilterData& d, const SimulationResult& r,
-                  size_t first, size_t count, size_t skip, std::vector<double>* e) {
+                  size_t first, size_t count, size_t skip, Errors* e) {
   const int m = int(meas.outputs.size());
   const size_t first_z = r.columns.size() - size_t(m);  // t, states, z_<outputs>
   for (size_t i = skip; i < count; ++i) {
     for (int j = 0; j < m; ++j) {
       const double z = d.z[(first + i) * m + j];
-      double err = std::isfinite(z) ? z - r.rows[i][first_z + j] : 0.0;
+      const bool seen = std::isfinite(z);
+      double err = seen ? z - r.rows[i][first_z + j] : 0.0;
       if (meas.angle_outputs[j]) err = WrapAngle(err);
-      e->push_back(err);
+      e->e.push_back(err);
+      e->observed.push_back(seen ? 1 : 0);
     }
   }
 }
@@ -77,8 +88,7 @@ struct RunStart {
 // Appends the free-simulation errors of one run to *e; false with *why when
 // a simulation fails.
 bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData& d,
-               const RunStart& start, double horizon, std::vector<double>* e, long* windows,
-               std::string* why) {
+               const RunStart& start, double horizon, Errors* e, long* windows, std::string* why) {
   const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
   const int n = int(model.states.size());
   const size_t rows = d.t.size();
@@ -103,17 +113,25 @@ bool RunErrors(const ModelEntry& model, const FilterSpec& spec, const FilterData
   return true;
 }
 
-// sqrt(mean e^2) per output (outputs fastest in e), scaled by the largest
-// |e| so that errors near the largest double (a diverged record) give a
-// finite RMSE rather than an overflowed inf.
-std::vector<double> Rmse(const std::vector<double>& e, int m) {
+// sqrt(mean e^2) per output over its observed errors (outputs fastest; NaN
+// for an output never observed), scaled by the largest |e| so that errors
+// near the largest double (a diverged record) give a finite RMSE rather
+// than an overflowed inf.
+std::vector<double> Rmse(const Errors& errors, int m) {
+  const std::vector<double>& e = errors.e;
   std::vector<double> scale(m, 0.0), sum(m, 0.0);
-  for (size_t i = 0; i < e.size(); ++i) scale[i % m] = std::max(scale[i % m], std::abs(e[i]));
+  std::vector<long> n(m, 0);
+  for (size_t i = 0; i < e.size(); ++i) {
+    if (!errors.observed[i]) continue;
+    scale[i % m] = std::max(scale[i % m], std::abs(e[i]));
+    ++n[i % m];
+  }
   for (size_t i = 0; i < e.size(); ++i) {
     const double s = scale[i % m];
-    if (s > 0) sum[i % m] += (e[i] / s) * (e[i] / s);
+    if (errors.observed[i] && s > 0) sum[i % m] += (e[i] / s) * (e[i] / s);
   }
-  for (int j = 0; j < m; ++j) sum[j] = scale[j] * std::sqrt(sum[j] / double(e.size() / size_t(m)));
+  for (int j = 0; j < m; ++j)
+    sum[j] = n[j] > 0 ? scale[j] * std::sqrt(sum[j] / double(n[j])) : std::nan("");
   return sum;
 }
 
@@ -151,12 +169,12 @@ class SimulationErrors {
                    const std::vector<FilterData>& runs, double horizon)
       : model_(model), spec_(spec), map_(map), runs_(runs), horizon_(horizon) {}
   bool operator()(double const* const* parameters, double* residuals) const {
-    std::vector<double> e;
-    if (!Errors(parameters[0], &e)) return false;
-    std::copy(e.begin(), e.end(), residuals);
+    Errors e;
+    if (!At(parameters[0], &e)) return false;
+    std::copy(e.e.begin(), e.e.end(), residuals);
     return true;
   }
-  bool Errors(const double* theta, std::vector<double>* e, long* windows = nullptr) const {
+  bool At(const double* theta, Errors* e, long* windows = nullptr) const {
     std::vector<RunStart> starts;
     const FilterSpec s = map_.At(spec_, theta, &starts);
     long w = 0;
@@ -303,11 +321,10 @@ std::vector<double> FreeSimulationRmse(const ModelEntry& model, const FilterSpec
                      "state: the data need a column per state (map them with --column, e.g. "
                      "theta=angle-pi)");
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
-  std::vector<double> e;
+  Errors e;
   long windows = 0;
   std::string why;
-  if (!RunErrors(model, spec, data, {.windows = true, .x0 = {}}, horizon, &e, &windows, &why) ||
-      e.empty())
+  if (!RunErrors(model, spec, data, {.windows = true, .x0 = {}}, horizon, &e, &windows, &why))
     return std::vector<double>(m, std::nan(""));
   return Rmse(e, m);
 }
@@ -330,9 +347,15 @@ FreeSimulation WholeRecordSimulation(const ModelEntry& model, const FilterSpec& 
   const size_t m = meas.outputs.size(), first_z = r.columns.size() - m;
   for (size_t k = 0; k < rows; ++k)
     for (size_t j = 0; j < m; ++j) sim.y.push_back(r.rows[k][first_z + j]);
-  AppendErrors(meas, data, r, 0, rows, 0, &sim.e);
-  sim.ok = !sim.e.empty();
-  if (sim.ok) sim.rmse = Rmse(sim.e, int(m));
+  Errors e;
+  AppendErrors(meas, data, r, 0, rows, 0, &e);
+  sim.e = e.e;
+  sim.ok = e.Count() > 0;
+  if (sim.ok) {
+    sim.rmse = Rmse(e, int(m));
+  } else {
+    sim.why = data.path + " has no finite measurement to compare with";
+  }
   return sim;
 }
 
@@ -361,18 +384,22 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   const int p = int(r.theta_initial.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
   const SimulationErrors errors(model, spec, map, runs, options.horizon);
-  std::vector<double> e0;
-  if (!errors.Errors(r.theta_initial.data(), &e0, &r.windows))
+  Errors e0;
+  if (!errors.At(r.theta_initial.data(), &e0, &r.windows))
     throw InputError("output-error at the initial parameters: " + errors.why());
-  r.residuals = long(e0.size());
-  for (double v : e0) r.cost_initial += 0.5 * v * v;
+  r.residuals = e0.Count();  // the observed ones
+  if (r.residuals == 0)
+    throw InputError(
+        "output-error: the data have no finite measurement to fit (every z cell "
+        "is empty or NaN)");
+  for (double v : e0.e) r.cost_initial += 0.5 * v * v;
 
   ceres::NumericDiffOptions step;
   step.relative_step_size = options.theta_step;
   auto* cost = new ceres::DynamicNumericDiffCostFunction<SimulationErrors, ceres::CENTRAL>(
       new SimulationErrors(model, spec, map, runs, options.horizon), ceres::TAKE_OWNERSHIP, step);
   cost->AddParameterBlock(p);
-  cost->SetNumResiduals(int(e0.size()));
+  cost->SetNumResiduals(int(e0.e.size()));
   std::vector<double> theta = r.theta_initial;
   ceres::Problem problem;
   problem.AddResidualBlock(cost, nullptr, theta.data());
@@ -394,8 +421,8 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   r.fitted_spec = map.At(spec, theta.data());
 
   ceres::CRSMatrix jac;
-  std::vector<double> e;
-  problem.Evaluate(ceres::Problem::EvaluateOptions(), &r.cost, &e, nullptr, &jac);
+  Errors e{.e = {}, .observed = e0.observed};  // the same cells are missing at every theta
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &r.cost, &e.e, nullptr, &jac);
   r.converged = r.ok && summary.termination_type == ceres::CONVERGENCE && r.cost <= r.cost_initial;
   if (r.ok && !r.converged && summary.termination_type == ceres::CONVERGENCE)
     r.message = "the final squared error " + FormatNumber(2 * r.cost) + " exceeds the initial " +

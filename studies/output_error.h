@@ -6,7 +6,8 @@
 // A free simulation runs without noise and without filtering, at the data's
 // times, with the data's input held over each interval (zero-order hold,
 // src/sim/simulation.h), and its outputs are compared with the recorded z_k
-// (angle outputs wrapped; missing z_k count 0):
+// (angle outputs wrapped; a missing z_k is left out: it adds nothing to the
+// squared error and does not count in N, the RMSE or sigma):
 //
 //   e_kj = wrap(z_kj - h_j(x_sim(t_k))),   RMSE_j = sqrt(mean_k e_kj^2)
 //
@@ -71,7 +72,7 @@ struct OutputErrorResult {
   std::vector<std::string> x0_names;
   std::vector<std::vector<double>> x0, x0_std_errors;
   std::vector<std::string> identifiability;
-  long residuals = 0;  // N, outputs x rows
+  long residuals = 0;  // N: the measured (finite) z cells
   long windows = 0;
   double cost_initial = 0.0, cost = 0.0;  // 1/2 sum e^2
   double residual_sd = 0.0;               // sigma
@@ -100,8 +101,9 @@ std::vector<double> FreeSimulationRmse(const ModelEntry& model, const FilterSpec
 // The free simulation of `spec` over the whole record from x0 at its first
 // row (one simulation, the input held as everywhere): the simulated outputs
 // y and the errors e = wrap(z - y) (0 where z is missing), rows x outputs,
-// outputs fastest, and the RMSE per output (over every row, a missing z
-// counting 0). ok false, with why, when the simulation fails.
+// outputs fastest, and the RMSE per output over the rows where z is finite
+// (NaN for an output never measured). ok false, with why, when the
+// simulation fails or no z cell is finite.
 struct FreeSimulation {
   bool ok = false;
   std::string why;

@@ -3,6 +3,7 @@
 #include <glob.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "src/core/parse.h"
@@ -40,10 +41,21 @@ std::vector<FilterData> LoadFiles(const SectionValues& v, const std::string& key
                                   const ScenarioConfig& sc) {
   const MeasurementDesc& meas = sc.model->FindMeasurement(sc.truth.measurement);
   std::vector<FilterData> runs;
+  std::vector<std::string> seen;  // canonical paths: a file is one run
   for (const std::string& file : ExpandFiles(v, key)) {
+    std::error_code ec;
+    const std::string canonical = fs::weakly_canonical(file, ec).string();
+    if (std::find(seen.begin(), seen.end(), canonical) != seen.end())
+      v.Fail(key, "'" + file + "' is listed twice; each file is one run (a second copy would " +
+                      "count it twice and narrow every interval)");
+    seen.push_back(canonical);
     runs.push_back(Checked(*v.Get(key), v.errors(), [&](const std::string&) {
       return cli::LoadFilterData(file, *sc.model, meas, sc.columns, sc.has_truth);
     }));
+    if (std::none_of(runs.back().z.begin(), runs.back().z.end(),
+                     [](double z) { return std::isfinite(z); }))
+      v.Fail(key, "'" + file + "' has no finite measurement (every z cell is empty or NaN): " +
+                      "a run of it would filter nothing");
     if (sc.has_truth && !runs.back().has_truth) {
       std::string states;
       for (const auto& s : sc.model->states) states += (states.empty() ? "" : ", ") + s;
@@ -84,6 +96,14 @@ void ReadRecordedData(const SectionValues& v, ScenarioConfig* sc) {
   }
   sc->data_runs = LoadFiles(v, "data", *sc);
   if (v.Has("tune-data")) sc->tune_runs = LoadFiles(v, "tune-data", *sc);
+  // Tuning on an evaluated file reports an in-sample fit as a validation.
+  for (const FilterData& t : sc->tune_runs)
+    for (const FilterData& d : sc->data_runs) {
+      std::error_code ec;
+      if (fs::equivalent(t.path, d.path, ec) && !ec)
+        v.Fail("tune-data", "'" + t.path + "' is also in data: a file the noise is tuned on " +
+                                "cannot validate it (list it in one of the two)");
+    }
   if (v.Has("burn-in")) {
     sc->burn_in = Checked(*v.Get("burn-in"), v.errors(), [](const std::string& t) {
       return ParseCount(t, "burn-in", 0, kMaxSteps);

@@ -626,6 +626,13 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
     }
     if (!t.csv.empty()) WriteTextFile(dir + "/tuned.csv", t.csv);
   }
+  if (fs::exists(dir + "/tuned.csv")) {  // this run's or, complete, the earlier one's
+    const CsvText tuned = ReadCsvText(dir + "/tuned.csv");
+    const int status = tuned.Column("status");
+    for (const auto& row : tuned.rows)
+      summary.failed_tunings +=
+          status >= 0 && size_t(status) < row.size() && row[status] == "failed";
+  }
 
   RunContext ctx;
   ctx.config = &tuned_config;

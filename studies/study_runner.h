@@ -56,6 +56,7 @@ struct StudyRunSummary {
   long failed_filter_runs = 0;  // filter x noise results with status != ok
   int tunings = 0;              // 'tuned' scenario x filter x noise combinations
   int reused_tunings = 0;       // of them found in DIR/tuning/ (study_tuning.h)
+  int failed_tunings = 0;       // of them status "failed" in tuned.csv (exit 1)
   bool interrupted = false;
   double wall_s = 0.0;
   std::string report;  // report.md text when complete

@@ -31,7 +31,7 @@ namespace estlab {
 struct SlurmOptions {
   int shards = 1;           // array tasks
   int cpus_per_task = 0;    // 0 = the config's jobs
-  std::string sbatch_opts;  // extra sbatch options, verbatim (--partition=... --time=...)
+  std::string sbatch_opts;  // extra sbatch options, plain words (--partition=... --time=...)
   std::string estlab;       // absolute path of the estlab binary the jobs run
   std::string config_path;  // the study file (made absolute)
   bool dry_run = false;     // write the scripts, submit nothing
@@ -45,8 +45,11 @@ struct SlurmPlan {
   std::vector<int> pending_shards;  // shards to (re)run: not complete
   bool merged = false;              // OUT already holds the merged study
   std::string array_script, merge_script;
-  std::vector<std::string> commands;  // the sbatch commands, as a shell would run them
-  std::string array_job, merge_job;   // job ids once submitted ("" = none)
+  // The sbatch commands, word by word (run without a shell; ShellJoin shows
+  // them); the merge's --dependency holds "$ARRAY" until the array's id is
+  // known.
+  std::vector<std::vector<std::string>> commands;
+  std::string array_job, merge_job;  // job ids once submitted ("" = none)
 };
 
 // The shard folder of shard k.

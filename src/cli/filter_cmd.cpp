@@ -21,6 +21,11 @@ namespace po = boost::program_options;
 
 namespace estlab::cli {
 
+// The particle smoother keeps M trajectories of every row: checked before
+// anything is allocated (1e9 once ended in std::bad_alloc).
+constexpr int kMaxSmootherTrajectories = 100000;
+constexpr double kMaxSmootherBytes = 4.0 * 1073741824.0;  // their states: 4 GiB
+
 namespace {
 
 constexpr const char* kExamples = R"(Examples:
@@ -160,6 +165,17 @@ void PrintEss(const FilterSummary& s) {
             << " updates collapsed (ESS < " << DegeneracyMonitor::Threshold(s.particles) << ")\n";
 }
 
+// When some truth cells are missing: the rows each state's RMSE is over.
+void PrintTruthRows(const FilterSummary& s) {
+  bool partial = false;
+  for (long n : s.truth_rows) partial = partial || n < s.steps;
+  if (!partial) return;
+  std::cout << "  (over the rows with finite truth:";
+  for (size_t i = 0; i < s.truth_rows.size(); ++i)
+    std::cout << (i ? ", " : " ") << s.states[i] << " " << s.truth_rows[i] << " of " << s.steps;
+  std::cout << ")\n";
+}
+
 void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::string& truth,
                   const std::string& out_path) {
   std::cout << std::setprecision(5);
@@ -179,6 +195,7 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
       if (f != nullptr && i < f->rmse.size()) std::cout << "  " << std::setw(12) << f->rmse[i];
       std::cout << "\n";
     }
+    PrintTruthRows(s);
     std::cout << "\n";
   }
   std::cout << "log-likelihood  " << s.loglik << (f ? "   (the forward filter's)" : "") << "\n";
@@ -215,6 +232,8 @@ void WriteSummaryJson(const FilterSummary& s, JsonWriter& j,
   for (size_t i = 0; i < s.rmse.size(); ++i) j.Key(s.states[i]).Value(s.rmse[i]);
   j.EndObject().Key("mae").BeginObject();
   for (size_t i = 0; i < s.mae.size(); ++i) j.Key(s.states[i]).Value(s.mae[i]);
+  j.EndObject().Key("truth_rows").BeginObject();
+  for (size_t i = 0; i < s.truth_rows.size(); ++i) j.Key(s.states[i]).Value(s.truth_rows[i]);
   j.EndObject();
   j.Key("loglik").Value(s.loglik).Key("updates").Value(s.updates);
   j.Key("mean_nis").Value(s.mean_nis);
@@ -290,7 +309,8 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   AddTruthOptions(&desc);
   if (smooth)
     desc.add_options()("smoother-trajectories", po::value<int>()->default_value(100),
-                       "pf: backward-simulated trajectories of the particle smoother (>= 2)");
+                       "pf: backward-simulated trajectories of the particle smoother (2..100000; "
+                       "memory: M x rows x states x 8 bytes)");
   AddFilterOptions(&desc);
   AddConfigOption(&desc);
   po::variables_map vm;
@@ -311,9 +331,14 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   if (smooth) {
     spec.smooth = true;
     spec.smoother_trajectories = vm["smoother-trajectories"].as<int>();
-    if (spec.smoother_trajectories < 2)
-      throw InputError("--smoother-trajectories must be at least 2, got " +
+    if (spec.smoother_trajectories < 2 || spec.smoother_trajectories > kMaxSmootherTrajectories)
+      throw InputError("--smoother-trajectories must be in 2.." +
+                       std::to_string(kMaxSmootherTrajectories) + ", got " +
                        std::to_string(spec.smoother_trajectories));
+    if (!vm["smoother-trajectories"].defaulted() && spec.kind() != FilterKind::kPf)
+      throw InputError(std::string("--smoother-trajectories applies to the particle smoother "
+                                   "(--filter pf), not ") +
+                       FilterKindName(spec.kind()));
     // The particle smoother weighs by the transition density: a fixed Q must
     // be positive definite (a white-noise-acceleration Q is checked per step).
     if (spec.kind() == FilterKind::kPf && !spec.q_white_accel)
@@ -326,6 +351,16 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
   const FilterData data = LoadFilterData(data_path, model, meas, ParseColumnRenames(vm), truth.read,
                                          ConstantInputGiven(vm));
   CheckPriorTime(spec, data);
+  if (smooth && spec.kind() == FilterKind::kPf) {  // the trajectories, before they exist
+    const double bytes = double(spec.smoother_trajectories) * double(data.t.size()) *
+                         double(model.states.size()) * 8.0;
+    if (bytes > kMaxSmootherBytes)
+      throw InputError("--smoother-trajectories " + std::to_string(spec.smoother_trajectories) +
+                       " over " + std::to_string(data.t.size()) + " rows of " + data_path +
+                       " would take " + FormatNumber(bytes / 1073741824.0) + " GiB (at most " +
+                       FormatNumber(kMaxSmootherBytes / 1073741824.0) +
+                       "): fewer trajectories, or a shorter record");
+  }
   // Open the output first so an unwritable path fails before the work.
   const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";
   std::optional<OutputFile> out;

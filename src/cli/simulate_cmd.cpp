@@ -224,7 +224,9 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
   if (!vm.count("out")) throw InputError("--out is required");
-  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"config", "data"}));
+  const std::vector<std::string> inputs = InputFiles(vm, {"config", "data"});
+  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), inputs);
+  RefuseOutputOverInput("--out (its sidecar)", vm["out"].as<std::string>() + ".json", inputs);
   if (vm.count("column") && !vm.count("data")) throw InputError("--column needs --data");
 
   const ModelEntry& model = FindModel(vm["model"].as<std::string>());

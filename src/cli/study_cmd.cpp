@@ -15,6 +15,7 @@
 #include "src/io/csv_reader.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
+#include "src/io/shell.h"
 #include "studies/run_figures.h"
 #include "studies/study_config.h"
 #include "studies/study_figures.h"
@@ -56,8 +57,9 @@ runs.csv and summary.csv do not depend on --jobs or
 --shard. Ctrl-C (or SIGTERM) stops taking new runs, writes the finished ones
 and exits 130 (143); the same command again resumes.
 Exit status: 0 done (filter runs that failed numerically are results: their
-status is in runs.csv), 2 bad config or options, or an output that cannot be
-written (a read-only or full folder), 130/143 interrupted (resumable).
+status is in runs.csv), 1 done but a noise tuning failed (tuned.csv says
+why), 2 bad config or options, or an output that cannot be written (a
+read-only or full folder), 130/143 interrupted (resumable).
 )";
 
 std::atomic<int> g_stop_signal{0};
@@ -141,7 +143,8 @@ std::string SummaryJson(const std::string& dir, const StudyConfig& config,
   j.Key("status").Value(sum.interrupted ? "interrupted" : "complete");
   j.Key("total_runs").Value(sum.total_runs).Key("finished_runs").Value(sum.finished_runs);
   j.Key("resumed_runs").Value(sum.resumed_runs);
-  j.Key("failed_filter_runs").Value(sum.failed_filter_runs).Key("wall_s").Value(sum.wall_s);
+  j.Key("failed_filter_runs").Value(sum.failed_filter_runs);
+  j.Key("failed_tunings").Value(long(sum.failed_tunings)).Key("wall_s").Value(sum.wall_s);
   j.Key("summary").BeginArray();
   if (!sum.interrupted) {
     const CsvText s = ReadCsvText(dir + "/summary.csv");
@@ -165,6 +168,17 @@ std::string SummaryJson(const std::string& dir, const StudyConfig& config,
 
 // `--slurm N`: the scripts, the submission (unless --slurm-dry-run), and how
 // to follow it.
+// An sbatch command as a shell line to paste: each word quoted, but the
+// merge's "$ARRAY" (our own text) left for the shell to expand.
+std::string ShownCommand(const std::vector<std::string>& words) {
+  std::string line;
+  for (const std::string& w : words) {
+    const bool ours = w.find("$ARRAY") != std::string::npos;
+    line += (line.empty() ? "" : " ") + (ours ? w : ShellJoin({w}));
+  }
+  return line;
+}
+
 int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
                   const StudyRunOptions& run, bool json) {
   if (vm.count("shard")) throw InputError("--slurm makes the shards itself; leave out --shard");
@@ -193,7 +207,7 @@ int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
     for (int k : plan.pending_shards) j.Value(k);
     j.EndArray().Key("array_job").Value(plan.array_job).Key("merge_job").Value(plan.merge_job);
     j.Key("commands").BeginArray();
-    for (const auto& c : plan.commands) j.Value(c);
+    for (const auto& c : plan.commands) j.Value(ShownCommand(c));
     j.EndArray().EndObject();
     std::cout << j.str() << "\n";
     return 0;
@@ -205,12 +219,14 @@ int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
   if (o.dry_run) {
     std::cout << "wrote " << plan.array_script << " and " << plan.merge_script
               << "; submit with:\n";
-    for (const auto& c : plan.commands)
+    for (const auto& c : plan.commands) {
+      const std::string shown = ShownCommand(c);
       std::cout << "  "
-                << (c.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
-                        ? "ARRAY=$(" + c + ")"
-                        : c)
+                << (shown.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
+                        ? "ARRAY=$(" + shown + ")"
+                        : shown)
                 << "\n";
+    }
     return 0;
   }
   if (!plan.array_job.empty())
@@ -280,7 +296,8 @@ int RunStudyCommand(const std::vector<std::string>& args) {
       "N: submit the study as a Slurm job array of N shards plus a merge job into --out "
       "(scripts, shard folders and logs in OUT.slurm/); again: only unfinished shards")(
       "slurm-opts", po::value<std::string>()->default_value(""),
-      "extra sbatch options for both jobs, e.g. \"--partition=short --time=01:00:00\"")(
+      "extra sbatch options for both jobs, plain words (no quotes or shell syntax), e.g. "
+      "\"--partition=short --time=01:00:00\"")(
       "slurm-dry-run", "with --slurm: write the scripts and print the sbatch commands")(
       "status", po::value<std::string>(),
       "DIR: how far the study in DIR (or its --slurm shards) is; no CONFIG needed");
@@ -338,6 +355,11 @@ int RunStudyCommand(const std::vector<std::string>& args) {
     const bool identification = std::filesystem::exists(options.out_dir + "/identification.csv");
     std::cout << "\nwrote " << options.out_dir << "/{runs,summary,time_metrics"
               << (identification ? ",identification" : "") << "}.csv, report.md, manifest.json\n";
+  }
+  if (sum.failed_tunings > 0) {  // results, but not the ones asked for
+    std::cerr << "estlab: " << sum.failed_tunings << " noise tuning(s) failed (" << options.out_dir
+              << "/tuned.csv says why; their runs are marked failed)\n";
+    return 1;
   }
   return 0;
 }

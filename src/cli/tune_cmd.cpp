@@ -666,7 +666,8 @@ int RunTune(const std::vector<std::string>& args) {
       "the convergence")("horizon", po::value<std::string>()->default_value("0.5"),
                          "s: output-error windows and the validation's free-simulation RMSE")(
       "profile", po::value<std::string>(),
-      "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21)")(
+      "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21; "
+      "N <= 1000; LO and HI inside the parameter's constraint)")(
       "profile-out", po::value<std::string>(),
       "prefix of the profile's CSV and figure (default profile_NAME)")(
       "validate", po::value<std::vector<std::string>>()->composing(),
@@ -707,6 +708,10 @@ int RunTune(const std::vector<std::string>& args) {
     throw InputError("--profile-out needs --profile");
   }
   auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
+  for (const char* key : {"estimate-param", "estimate-x0", "param-bounds", "param-prior"})
+    if (vm.count(key) && Trim(text(key)).empty())  // once ignored silently
+      throw InputError(std::string("--") + key +
+                       " is empty: name what it applies to, or leave it out");
   TunerOptions options =
       BuildTunerOptions(TunerSettingsFromVariablesMap(vm), GuessKey(vm, "q"), GuessKey(vm, "r"));
   const EstimatorInfo& estimator = InfoOf(options.estimator);
@@ -761,6 +766,7 @@ int RunTune(const std::vector<std::string>& args) {
       named = named || e.name == profile_request->name;
     if (!named)
       throw InputError("--profile: '" + profile_request->name + "' is not in --estimate-param");
+    CheckProfileRequest(model, *profile_request);
   }
   if (output_error) {
     if (profile_request) throw InputError("--profile applies to --estimator ml");

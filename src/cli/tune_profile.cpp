@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "src/core/params.h"
 #include "src/core/parse.h"
 #include "src/core/types.h"
 #include "src/io/output_file.h"
@@ -41,8 +42,30 @@ ProfileRequest ParseProfileRequest(const std::string& text) {
   r.hi = ParseNumber(parts[1], "--profile " + r.name);
   if (!(r.lo < r.hi))
     throw InputError("--profile " + r.name + ": LO " + parts[0] + " is not below HI " + parts[1]);
-  if (parts.size() == 3) r.points = int(ParseInteger(parts[2], "--profile " + r.name + " N", 3));
+  if (parts.size() == 3) {
+    const long n = ParseInteger(parts[2], "--profile " + r.name + " N", 3);
+    if (n > kMaxProfilePoints)
+      throw InputError("--profile " + r.name + ": N = " + parts[2] + " points exceeds " +
+                       std::to_string(kMaxProfilePoints) + " (each point is a full re-fit)");
+    r.points = int(n);
+  }
   return r;
+}
+
+void CheckProfileRequest(const ModelEntry& model, const ProfileRequest& request) {
+  if (!request.has_range) return;  // the default range stays inside the constraint
+  for (const ParamDesc& d : model.params) {
+    if (d.name != request.name) continue;
+    for (const double v : {request.lo, request.hi}) {  // a line: its ends decide
+      try {
+        CheckConstraint(model.name, d.name.c_str(), v, d.constraint);
+      } catch (const InputError& e) {
+        throw InputError("--profile " + request.name + "=" + FormatNumber(request.lo) + ":" +
+                         FormatNumber(request.hi) + ": the grid leaves the parameter's range (" +
+                         e.what() + ")");
+      }
+    }
+  }
 }
 
 ProfileResult ProfileLikelihood(const ModelEntry& model, const TunerOptions& options,

@@ -29,8 +29,17 @@ struct ProfileRequest {
   double lo = 0.0, hi = 0.0;
   int points = 21;
 };
-// Parses NAME[=LO:HI[:N]]; throws InputError naming the text.
+// At most this many grid points (each one a full re-fit).
+inline constexpr long kMaxProfilePoints = 1000;
+
+// Parses NAME[=LO:HI[:N]]; throws InputError naming the text (N in
+// 3..kMaxProfilePoints).
 ProfileRequest ParseProfileRequest(const std::string& text);
+
+// Throws InputError when LO or HI violates the parameter's constraint
+// (L > 0, b >= 0, ...), naming the value: checked before the fit, so that
+// nothing is written.
+void CheckProfileRequest(const ModelEntry& model, const ProfileRequest& request);
 
 struct ProfileResult {
   std::string name;

@@ -215,6 +215,8 @@ void WriteRun(JsonWriter* j, const ValidationRun& r, const std::vector<std::stri
   if (!s.rmse.empty()) {
     j->Key("rmse").BeginObject();
     for (size_t i = 0; i < s.rmse.size(); ++i) j->Key(s.states[i]).Value(s.rmse[i]);
+    j->EndObject().Key("truth_rows").BeginObject();
+    for (size_t i = 0; i < s.truth_rows.size(); ++i) j->Key(s.states[i]).Value(s.truth_rows[i]);
     j->EndObject();
     j->Key("mean_nees").Value(s.mean_nees);
     j->Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});

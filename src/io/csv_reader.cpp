@@ -123,8 +123,15 @@ CsvTable ParseCsv(const std::string& text, const std::string& path) {
 }
 
 CsvTable ReadCsv(const std::string& path) {
-  if (std::filesystem::is_directory(path))
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(status))
     throw InputError("data file '" + path + "' is a directory");
+  // A FIFO would block until a writer comes (forever, in a study), a
+  // device might never end: data are regular files.
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw InputError("data file '" + path +
+                     "' is not a regular file (a FIFO, socket or device); give a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read data file '" + path + "'");
   return ParseCsvStream(in, path);

@@ -71,6 +71,10 @@ class Checker {
       Report(top, "missing [states] section");
     } else if (m_.states.empty()) {
       Report(*raw_.states_section, "the model has no states");
+    } else if (m_.states.size() > size_t(kMaxStates)) {
+      Report(m_.states[kMaxStates].pos,
+             "state '" + m_.states[kMaxStates].name + "' is one too many: a model has at most " +
+                 std::to_string(kMaxStates) + " states (the filters' fixed gain storage)");
     }
     if (!raw_.has_measurement_section) Report(top, "the model has no [measurement NAME] section");
     if (raw_.rhs_section && raw_.step_section) {

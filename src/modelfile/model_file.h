@@ -101,6 +101,11 @@ struct InvariantDecl {
   SourcePos pos;
 };
 
+// The most states a model may have: the filters keep their gains in fixed
+// storage of this many rows (src/filters/filter.h, kMaxGainStates; a test
+// checks that the two agree). `model check` refuses more.
+inline constexpr int kMaxStates = 16;
+
 struct ModelFile {
   std::string path;
   std::string name;

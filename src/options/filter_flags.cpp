@@ -167,6 +167,8 @@ std::vector<std::string> InputFiles(const po::variables_map& vm,
     if (const auto* many = boost::any_cast<std::vector<std::string>>(&value))
       files.insert(files.end(), many->begin(), many->end());
   }
+  const size_t given = files.size();  // each one's sidecar is read too
+  for (size_t i = 0; i < given; ++i) files.push_back(files[i] + ".json");
   return files;
 }
 

@@ -83,7 +83,8 @@ FilterData LoadInputRecord(const std::string& path, const ModelEntry& model,
 void CheckPriorTime(const FilterSpec& spec, const FilterData& data);
 
 // The file names given to the options `keys` (each a string or a repeatable
-// string option), in order; absent options add nothing. For
+// string option), in order, then each one's sidecar FILE.json (read for
+// truth columns and noise); absent options add nothing. For
 // RefuseOutputOverInput.
 std::vector<std::string> InputFiles(const boost::program_options::variables_map& vm,
                                     const std::vector<std::string>& keys);

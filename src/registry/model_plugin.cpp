@@ -1,10 +1,12 @@
 #include "src/registry/model_plugin.h"
 
 #include <dlfcn.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -132,13 +134,60 @@ class Progress {
   std::thread thread_;
 };
 
+// Replaces every `from` in `text` with `to`.
+std::string ReplaceAll(std::string text, const std::string& from, const std::string& to) {
+  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size())
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+// The header the libraries of `dir` are compiled from: DIR/model.h, a copy
+// of the text the key was made of (a .model file's generated header, a C++
+// header's own text). When it is missing it is written; when it is not that
+// text (edited by hand, or a header edited while it compiled) it is
+// rewritten and the libraries beside it, which may hold the other text,
+// are removed: a cache entry always holds what its key says.
+void EnsureSnapshot(const fs::path& dir, const std::string& text) {
+  fs::create_directories(dir);
+  const fs::path header = dir / "model.h";
+  std::error_code ec;
+  if (fs::exists(header, ec) && ReadModelText(header.string()) == text) return;
+  for (const char* library : {"entry.so", "tune.so"}) fs::remove(dir / library, ec);
+  WriteAtomically(header, text);
+}
+
+// Removes what killed compiles left in `dir`: NAME.PID.tmp.{cpp,so,log}
+// (and model.h.tmp.PID) of processes that no longer run.
+void RemoveLeftovers(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const size_t tmp = name.find(".tmp");
+    if (tmp == std::string::npos) continue;
+    // The pid: the digits before ".tmp" (entry.123.tmp.cpp) or after it
+    // (model.h.tmp.123).
+    auto is_pid = [](const std::string& t) {
+      return !t.empty() && t.size() < 12 && t.find_first_not_of("0123456789") == std::string::npos;
+    };
+    const size_t dot = tmp > 0 ? name.rfind('.', tmp - 1) : std::string::npos;
+    std::string digits = dot == std::string::npos ? "" : name.substr(dot + 1, tmp - dot - 1);
+    if (!is_pid(digits)) digits = name.size() > tmp + 5 ? name.substr(tmp + 5) : "";
+    if (!is_pid(digits)) continue;
+    const long pid = std::strtol(digits.c_str(), nullptr, 10);
+    if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
+  }
+}
+
 // Compiles `source` (a translation unit) into `library` unless it exists.
-// Returns the seconds it took (0 when cached).
+// Returns the seconds it took (0 when cached). The unit includes the
+// snapshot DIR/model.h, which must still be `snapshot` when the compile
+// ends (else it is refused: the library could hold another text).
 double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::string& which,
-                      const std::string& unit) {
+                      const std::string& unit, const std::string& snapshot) {
   const fs::path library = dir / (which + ".so");
   if (fs::exists(library)) return 0.0;
   fs::create_directories(dir);
+  RemoveLeftovers(dir);
   std::string tag = ".";  // appended: GCC 12 -O3 warns falsely on "." + std::string
   tag += std::to_string(::getpid());
   tag += ".tmp";
@@ -154,7 +203,10 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
       libs += ' ';
       libs += Quote(lib);
     }
-  const std::string command = std::string(ESTLAB_PLUGIN_CXX) + " " + PluginFlags() + " " +
+  // A C++ header's own relative includes: from its folder.
+  const std::string own =
+      s.header.empty() ? "" : " -iquote " + Quote(fs::path(s.header).parent_path().string());
+  const std::string command = std::string(ESTLAB_PLUGIN_CXX) + " " + PluginFlags() + own + " " +
                               Quote(cpp.string()) + " -o " + Quote(so.string()) + libs + " > " +
                               Quote(log.string()) + " 2>&1";
   int status;
@@ -166,11 +218,28 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::error_code ec;
   if (status != 0) {
-    const std::string output = fs::exists(log) ? ReadModelText(log.string()) : "";
+    // The compiler names the snapshot; the user knows their own file.
+    const std::string output =
+        fs::exists(log) ? ReplaceAll(ReadModelText(log.string()), (dir / "model.h").string(),
+                                     s.header.empty() ? (dir / "model.h").string() : s.header)
+                        : "";
     fs::remove(cpp, ec);
     fs::remove(so, ec);
     fs::remove(log, ec);
+    // Nothing of a failed compile stays: the snapshot (written again on the
+    // next use) and the folder once empty.
+    if (!fs::exists(dir / "entry.so", ec)) {
+      fs::remove(dir / "model.h", ec);
+      fs::remove(dir, ec);  // only when empty
+    }
     throw InputError("model " + s.path + " does not compile:" + Head(output, 20));
+  }
+  if (ReadModelText((dir / "model.h").string()) != snapshot) {
+    fs::remove(cpp, ec);
+    fs::remove(so, ec);
+    fs::remove(log, ec);
+    throw InputError("model " + s.path + ": its cached header " + (dir / "model.h").string() +
+                     " changed while it compiled; nothing was kept (run again)");
   }
   fs::rename(so, library);  // atomic: a concurrent compile of the same key just replaces it
   fs::remove(cpp, ec);
@@ -248,18 +317,19 @@ const ModelEntry& LoadModelFile(const std::string& path, ModelNeeds needs) {
   const std::lock_guard<std::mutex> lock(mutex);
   ModelSource s = ReadModelSource(path);
   const fs::path dir = fs::path(ModelCacheDir()) / (s.name + "-" + KeyOf(s));
-  fs::path header = s.header;
-  if (header.empty()) {  // a .model file: its generated header, kept for the user
-    header = dir / "model.h";
-    fs::create_directories(dir);
-    if (!fs::exists(header)) WriteAtomically(header, s.contents);
-  }
+  // The units include the snapshot DIR/model.h of the text the key was made
+  // of (EnsureSnapshot) by its name alone: they are compiled beside it, and
+  // the cache folder's path (which may hold a newline or a quote) never
+  // enters an #include.
+  EnsureSnapshot(dir, s.contents);
+  const fs::path header = "model.h";
   ModelBuildReport& report = Report();
   report = {};
   std::unique_ptr<ModelEntry>& entry = loaded[dir.string()];
   if (entry == nullptr) {
     report.entry_seconds = CompileLibrary(
-        s, dir, "entry", ModelEntryUnit(s, header.string(), ModelLinkage::kPlugin, false));
+        s, dir, "entry", ModelEntryUnit(s, header.string(), ModelLinkage::kPlugin, false),
+        s.contents);
     report.compiled_entry = report.entry_seconds > 0.0;
     report.entry_library = (dir / "entry.so").string();
     void* handle = Open(dir / "entry.so");
@@ -269,8 +339,8 @@ const ModelEntry& LoadModelFile(const std::string& path, ModelNeeds needs) {
   }
   report.entry_library = (dir / "entry.so").string();
   if (needs.tuner && entry->tune == nullptr) {
-    report.tuner_seconds =
-        CompileLibrary(s, dir, "tune", ModelTunerUnit(s, header.string(), ModelLinkage::kPlugin));
+    report.tuner_seconds = CompileLibrary(
+        s, dir, "tune", ModelTunerUnit(s, header.string(), ModelLinkage::kPlugin), s.contents);
     report.compiled_tuner = report.tuner_seconds > 0.0;
     void* handle = Open(dir / "tune.so");
     using TunerFn = decltype(ModelEntry::tune) (*)();

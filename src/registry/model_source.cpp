@@ -55,6 +55,16 @@ ModelSource ReadModelSource(const std::string& path) {
     s.type = "estlab::user_models::" + modelfile::DefaultTypeName(m);
     s.contents = modelfile::GenerateModelHeader(m, modelfile::DefaultTypeName(m));
   } else {
+    // The header is #included by its path: a quote or a control character
+    // there would end the line or the string early.
+    for (size_t i = 0; i < s.path.size(); ++i) {
+      const auto c = static_cast<unsigned char>(s.path[i]);
+      if (c == '"' || c < 0x20 || c == 0x7f)
+        throw InputError("model header '" + path + "': its path holds " +
+                         (c == '"' ? std::string("'\"'") : std::string("a control character")) +
+                         " at " + std::to_string(i + 1) +
+                         ", which an #include line cannot carry: rename it or its folder");
+    }
     s.name = fs::path(s.path).stem().string();
     s.header = s.path;
     s.contents = text;

@@ -136,6 +136,9 @@ std::vector<std::string> EstimateColumns(const RowLayout& layout, bool has_truth
 // The rows of `records` (when rows != nullptr) and, with truth, the RMSE,
 // MAE and mean NEES of their beliefs in *s:
 //   e_k = x_k - x^_k (angles wrapped), nees_k = e^T P^-1 e.
+// Each state's RMSE and MAE are over the rows where its truth is finite
+// (their count in s->truth_rows; NaN when none); NEES over the rows where
+// every state's is.
 // lag_one(k) gives the lag-one covariance of record k (nullptr: NaN).
 template <class Model, class Meas, class LagOneFn>
 void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& records,
@@ -146,6 +149,7 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
   using StateCov = Mat<N, N>;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> sq_err(N, 0.0), abs_err(N, 0.0);
+  std::vector<long> truth_rows(N, 0);  // rows with a finite error, per state
   double nees_sum = 0.0;
   long nees_count = 0;
   for (size_t k = 0; k < records.size(); ++k) {
@@ -188,10 +192,12 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
           nees_sum += nees;
           ++nees_count;
         }
-        for (int i = 0; i < N; ++i) {
-          sq_err[i] += e(i) * e(i);
-          abs_err[i] += std::abs(e(i));
-        }
+      }
+      for (int i = 0; i < N; ++i) {  // each state over its own finite rows
+        if (!std::isfinite(e(i))) continue;
+        sq_err[i] += e(i) * e(i);
+        abs_err[i] += std::abs(e(i));
+        ++truth_rows[i];
       }
       for (int i = 0; i < N; ++i) row.push_back(e(i));
       row.push_back(nees);
@@ -200,10 +206,13 @@ void EmitRows(const std::vector<RowRecord<Model::kStateDim, Meas::kDim>>& record
   }
   s->rmse.clear();
   s->mae.clear();
+  s->truth_rows.clear();
   if (data.has_truth && !records.empty()) {
-    for (int i = 0; i < N; ++i) {
-      s->rmse.push_back(std::sqrt(sq_err[i] / double(records.size())));
-      s->mae.push_back(abs_err[i] / double(records.size()));
+    for (int i = 0; i < N; ++i) {  // NaN for a state with no finite truth
+      const double n = truth_rows[i] > 0 ? double(truth_rows[i]) : nan;
+      s->rmse.push_back(std::sqrt(sq_err[i] / n));
+      s->mae.push_back(abs_err[i] / n);
+      s->truth_rows.push_back(truth_rows[i]);
     }
   }
   s->mean_nees = nees_count ? nees_sum / double(nees_count) : nan;
@@ -264,6 +273,7 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
     s.message = "smoother " + s.filter + ": " + why + "; no smoothed rows written";
     s.rmse.clear();
     s.mae.clear();
+    s.truth_rows.clear();
     return;
   }
   for (auto& r : *records) {

@@ -73,6 +73,7 @@ struct FilterSummary {
   std::string filter;
   std::vector<std::string> states;
   std::vector<double> rmse, mae;  // per state; empty without truth
+  std::vector<long> truth_rows;   // per state: the rows with finite truth
   double loglik = 0.0;
   long updates = 0;
   long steps = 0;  // rows processed

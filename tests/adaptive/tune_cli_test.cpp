@@ -461,6 +461,28 @@ TEST_F(TuneCli, OutputErrorValidationProfileAndFirstSample) {
     EXPECT_NE(e.err.find("estlab: error:"), std::string::npos) << e.err;
     EXPECT_FALSE(Exists("bad.ini")) << bad;
   }
+  // Issue 40 items 3, 16 and 19: a profile grid outside the parameter's
+  // constraint (it used to report NLLs at L = -1 as converged), an absurd
+  // grid, and empty option values (once ignored) are refused before the fit.
+  const std::pair<std::string, std::string> refused[] = {
+      {"--profile L=-1:0.9:5",
+       "--profile L=-1:0.9: the grid leaves the parameter's range (parameter 'L' of model "
+       "'pendulum' must be > 0, got -1)"},
+      {"--profile b=-5:0.5:4", "parameter 'b' of model 'pendulum' must be >= 0, got -5"},
+      {"--profile b=0.1:0.5:100000", "--profile b: N = 100000 points exceeds 1000"},
+      {"--estimate-x0 ''", "--estimate-x0 is empty"},
+  };
+  for (const auto& [args, message] : refused) {
+    const CmdResult e = Estlab(base + args + " --out bad.ini");
+    EXPECT_EQ(e.exit_code, 2) << args << "\n" << e.err;
+    EXPECT_NE(e.err.find(message), std::string::npos) << args << "\n" << e.err;
+    EXPECT_FALSE(Exists("bad.ini")) << args;
+    EXPECT_FALSE(Exists("profile_L.csv")) << args;
+  }
+  const CmdResult empty = Estlab(
+      "tune --model pendulum --measure angle --data run3.csv --estimate-param '' --out bad.ini");
+  EXPECT_EQ(empty.exit_code, 2) << empty.err;
+  EXPECT_NE(empty.err.find("--estimate-param is empty"), std::string::npos) << empty.err;
 }
 
 }  // namespace

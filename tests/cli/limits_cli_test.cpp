@@ -3,6 +3,7 @@
 // hanging, exhausting memory or running a filter that never moves.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,47 @@ TEST(LimitsCli, AbsurdSizesAndSigmaPointParametersExitTwo) {
   EXPECT_EQ(s.exit_code, 2) << s.err;
   EXPECT_NE(s.err.find("substeps: must be in [1, 100000]"), std::string::npos) << s.err;
   EXPECT_FALSE(dir.Exists("s.csv"));
+}
+
+// Issue 40 items 16, 17 and 19: the particle smoother's trajectories are
+// checked before they are allocated, an option that does not apply is
+// refused, and a FIFO given as data is refused instead of blocking forever.
+TEST(LimitsCli, SmootherTrajectoriesAndFifoDataAreRefusedBeforeAnyWork) {
+  TempDir dir;
+  const std::string simulate = kPendulumSimulate;
+  ASSERT_EQ(RunEstlab(simulate, dir.path()).exit_code, 0);
+  std::string long_run = simulate;  // 4001 rows
+  long_run.replace(long_run.find("--t-end 5 "), 10, "--t-end 50 ");
+  long_run.replace(long_run.find("--out d.csv"), 11, "--out long.csv");
+  ASSERT_EQ(RunEstlab(long_run, dir.path()).exit_code, 0);
+  const std::string smooth =
+      "smooth" + std::string(kPendulumFilter).substr(std::string("filter").size()) + "--out e.csv ";
+  struct Case {
+    std::string args, message;
+  };
+  const std::vector<Case> cases = {
+      {"--filter pf --smoother-trajectories 1000000000",
+       "--smoother-trajectories must be in 2..100000, got 1000000000"},
+      {"--filter pf --smoother-trajectories 100000 --particles 100 --data long.csv",
+       "--smoother-trajectories 100000 over 4001 rows of long.csv would take 5.96"},
+      {"--filter ekf --smoother-trajectories 50",
+       "--smoother-trajectories applies to the particle smoother (--filter pf), not ekf"},
+  };
+  for (const Case& c : cases) {
+    const std::string data = c.args.find("--data") == std::string::npos ? "--data d.csv " : "";
+    const RunResult r = RunEstlab(smooth + data + c.args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(dir.Exists("e.csv")) << c.args;
+  }
+  ASSERT_EQ(std::system(("mkfifo '" + dir.File("fifo.csv") + "'").c_str()), 0);
+  // (A regression blocks on the FIFO until ctest's time-out.)
+  const RunResult fifo =
+      RunEstlab(std::string(kPendulumFilter) + "--data fifo.csv --out f.csv", dir.path());
+  EXPECT_EQ(fifo.exit_code, 2) << fifo.err;
+  EXPECT_NE(fifo.err.find("data file 'fifo.csv' is not a regular file"), std::string::npos)
+      << fifo.err;
+  EXPECT_FALSE(dir.Exists("f.csv"));
 }
 
 }  // namespace

@@ -24,6 +24,7 @@ TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
   std::filesystem::create_symlink("d.csv", dir.File("link.csv"));
   const std::string data = ReadFile(dir.File("d.csv"));
   const std::string config = ReadFile(dir.File("c.ini"));
+  const std::string sidecar = ReadFile(dir.File("d.csv.json"));
   struct Case {
     std::string args;
     std::string expect;
@@ -39,6 +40,12 @@ TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
       {tune + "--data x.csv --data d.csv --out ./d.csv", "is the input file 'd.csv'"},
       {tune + "--data x.csv --validate d.csv --out d.csv", "is the input file 'd.csv'"},
       {tune + "--data x.csv --config c.ini --out c.ini", "is the input file 'c.ini'"},
+      // Issue 40 item 5: a sidecar read with its data file is an input too,
+      // and simulate's own sidecar (OUT.json) is one of its outputs.
+      {filter + "--data d.csv --out d.csv.json", "is the input file 'd.csv.json'"},
+      {tune + "--data x.csv --validate d.csv --out d.csv.json", "is the input file 'd.csv.json'"},
+      {"simulate --model pendulum --config d.csv.json --out d.csv",
+       "--out (its sidecar) 'd.csv.json' is the input file 'd.csv.json'"},
   };
   for (const auto& c : cases) {
     const RunResult r = RunEstlab(c.args, dir.path());
@@ -47,6 +54,7 @@ TEST(OutputSafetyCli, OutputThatIsAnInputIsRefused) {
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
     EXPECT_EQ(ReadFile(dir.File("d.csv")), data) << c.args;
     EXPECT_EQ(ReadFile(dir.File("c.ini")), config) << c.args;
+    EXPECT_EQ(ReadFile(dir.File("d.csv.json")), sidecar) << c.args;
     EXPECT_TRUE(std::filesystem::is_symlink(dir.File("link.csv"))) << c.args;
   }
   EXPECT_EQ(dir.Files(), (std::vector<std::string>{"c.ini", "d.csv", "d.csv.json", "link.csv"}));

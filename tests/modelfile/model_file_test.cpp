@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "src/filters/filter.h"
 #include "src/modelfile/model_file.h"
 
 #ifndef ESTLAB_SOURCE_DIR
@@ -224,6 +225,36 @@ TEST(ModelFile, EveryMalformedFileReportsItsPosition) {
     }
     EXPECT_TRUE(found) << c.what << ": expected " << c.prefix << c.message << "\ngot:\n" << what;
   }
+}
+
+// Issue 40 item 13: 17 states passed `check` and then failed to compile
+// after 18 s (a static assertion in the filters); now `check` says which
+// state is one too many, where. The limit is the filters' gain storage.
+TEST(ModelFile, MoreStatesThanTheFiltersHoldIsReportedAtTheState) {
+  static_assert(kMaxStates == kMaxGainStates, "check refuses what the filters cannot hold");
+  std::string states, rhs;
+  for (int i = 0; i <= kMaxStates; ++i) {  // appended: GCC 12 warns falsely on "s" + string
+    const std::string n = std::to_string(i);
+    states += 's';
+    states += n;
+    states += " = [m]\n";
+    rhs += 's';
+    rhs += n;
+    rhs += " = -s";
+    rhs += n;
+    rhs += '\n';
+  }
+  const std::string text = "[model]\nname = many\n[states]\n" + states + "[rhs]\n" + rhs +
+                           "[measurement first]\ns0 = s0\n";
+  const std::string what = ErrorText(text);
+  EXPECT_NE(what.find("t.model:20:1: state 's16' is one too many: a model has at most 16 states"),
+            std::string::npos)
+      << what;
+  // 16 are fine.
+  std::string fewer = text;
+  fewer.erase(fewer.find("s16 = [m]\n"), 10);
+  fewer.erase(fewer.find("s16 = -s16\n"), 11);
+  EXPECT_EQ(ErrorText(fewer), "(no error)");
 }
 
 TEST(ModelFile, SeveralProblemsAreReportedTogetherInOrder) {

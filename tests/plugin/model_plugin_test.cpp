@@ -5,6 +5,8 @@
 // nothing of a failed compile. Label "plugin": these compile models (minutes
 // on two cores), so the sanitizer run (-L unit) leaves them out.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -267,6 +269,46 @@ TEST(ModelFile, CacheCompilesOnceRebuildsEditsAndSurvivesConcurrentFirstUse) {
   const RunResult edited = Est(build, dir.path(), cache.path());
   ASSERT_EQ(edited.exit_code, 0) << edited.err;
   EXPECT_NE(edited.out.find("\"compiled_entry\": true"), std::string::npos) << edited.out;
+}
+
+// Issue 40 items 8 and 10: a cache folder whose path holds a newline, an
+// #error line and a quote compiles the model, not the path (its name once
+// went into an #include); the same file named from its folder or from
+// above has one key (the path was in the generated header).
+TEST(ModelFile, CacheFolderPathIsNeverCompiledAndTheKeyIgnoresHowTheFileIsNamed) {
+  TempDir dir, cache;
+  const std::string odd = cache.path() + "/m\n#error INJECTED\n\"q\"";
+  fs::create_directories(dir.File("R"));
+  EditedPendulum(dir.File("R"), "9.65");
+  const RunResult inner = Est("model build edited.model --json", dir.File("R"), odd);
+  ASSERT_EQ(inner.exit_code, 0) << inner.err;
+  EXPECT_EQ(inner.err.find("#error INJECTED\n  "), std::string::npos) << inner.err;
+  EXPECT_EQ(inner.err.find("does not compile"), std::string::npos) << inner.err;
+  EXPECT_NE(inner.out.find("\"compiled_entry\": true"), std::string::npos) << inner.out;
+  const RunResult outer = Est("model build R/edited.model --json", dir.path(), odd);
+  ASSERT_EQ(outer.exit_code, 0) << outer.err;
+  EXPECT_NE(outer.out.find("\"compiled_entry\": false"), std::string::npos) << outer.out;
+  // Issue 40 item 9: the cached header edited by hand is not what the key
+  // says: it is put back and the library compiled again from it.
+  std::string header;
+  for (const auto& e : fs::recursive_directory_iterator(odd))
+    if (e.path().filename() == "model.h") header = e.path().string();
+  ASSERT_FALSE(header.empty());
+  const std::string original = ReadFile(header);
+  std::ofstream(header, std::ios::app) << "#error HAND-EDITED\n";
+  // Item 15: what a killed compile left (a process that has ended) goes.
+  const pid_t child = ::fork();
+  if (child == 0) _exit(0);
+  ::waitpid(child, nullptr, 0);
+  const std::string folder = fs::path(header).parent_path().string(),
+                    stale = folder + "/entry." + std::to_string(child) + ".tmp";
+  for (const char* ext : {".cpp", ".log"}) std::ofstream(stale + ext) << "left\n";
+  const RunResult edited = Est("model build R/edited.model --json", dir.path(), odd);
+  ASSERT_EQ(edited.exit_code, 0) << edited.err;
+  EXPECT_NE(edited.out.find("\"compiled_entry\": true"), std::string::npos) << edited.out;
+  EXPECT_EQ(ReadFile(header), original);
+  EXPECT_FALSE(fs::exists(stale + ".cpp"));
+  EXPECT_FALSE(fs::exists(stale + ".log"));
 }
 
 TEST(ModelFile, HeaderWithATypeErrorExits2AndLeavesNothing) {

@@ -125,6 +125,48 @@ TEST(OutputError, WholeRecordFitRecoversParametersAndInitialState) {
               r.param_std_errors[0], r.x0[0][0], r.x0_std_errors[0][0], r.iterations);
 }
 
+// Issue 40 item 2: missing measurements are left out, not zero residuals.
+// With every other z_theta NaN, the fit's N is the measured cells, its RMSE
+// is the one over them (recomputed here from the free simulation at the
+// fit) and sigma^2 = sum e^2 / (N - p); before, the NaN cells counted as
+// zero errors (RMSE 0.0214 instead of 0.0317 in the issue) and all-NaN data
+// fitted "501 residuals" with RMSE 0.
+TEST(OutputError, MissingMeasurementsAreLeftOutNotCountedAsZero) {
+  const ModelEntry& model = FindModel("pendulum");
+  FilterData d = Pendulum(kSigma, 5.0);
+  d.has_truth = false;
+  d.truth.clear();
+  const FilterData full = d;
+  long measured = 0;
+  for (size_t k = 0; k < d.z.size(); ++k) {
+    if (k % 2 == 1) d.z[k] = std::nan("");
+    measured += std::isfinite(d.z[k]);
+  }
+  FilterSpec spec = Spec(0.6, 0.2);
+  spec.x0 = {1.2, 0.0};
+  const OutputErrorResult r = FitOutputError(model, spec, {{.name = "L"}, {.name = "b"}}, {d}, {});
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_EQ(r.residuals, measured);
+  const FreeSimulation sim = WholeRecordSimulation(model, r.fitted_spec, full, spec.x0);
+  ASSERT_TRUE(sim.ok) << sim.why;
+  double sum = 0.0;
+  for (size_t k = 0; k < d.z.size(); k += 2) sum += (d.z[k] - sim.y[k]) * (d.z[k] - sim.y[k]);
+  EXPECT_NEAR(r.rmse[0], std::sqrt(sum / double(measured)), 1e-10 * kSigma);
+  EXPECT_NEAR(r.residual_sd, std::sqrt(sum / double(measured - 2)), 1e-10 * kSigma);
+  EXPECT_NEAR(r.residual_sd, kSigma, 0.15 * kSigma);  // the noise, not sqrt(1/2) of it
+  const FreeSimulation half = WholeRecordSimulation(model, r.fitted_spec, d, spec.x0);
+  ASSERT_TRUE(half.ok) << half.why;
+  EXPECT_NEAR(half.rmse[0], r.rmse[0], 1e-10 * kSigma);
+
+  for (double& z : d.z) z = std::nan("");
+  const std::string e = testing::ErrorText([&] {
+    FitOutputError(model, spec, {{.name = "L"}, {.name = "b"}}, {d}, {});
+  });
+  EXPECT_NE(e.find("output-error: the data have no finite measurement to fit"), std::string::npos)
+      << e;
+  EXPECT_FALSE(WholeRecordSimulation(model, spec, d, spec.x0).ok);
+}
+
 TEST(OutputError, RejectsDataItCannotUse) {
   const ModelEntry& model = FindModel("pendulum");
   const std::vector<EstimatedParam> estimate = {{.name = "L"}};

@@ -53,6 +53,56 @@ class RecordedStudy : public ::testing::Test {
   }
 };
 
+// Issue 40 item 4: a file listed twice (two runs of one recording: a
+// zero-width interval), a recording with no finite measurement (an "ok"
+// run with log-likelihood 0) and a tuning file that is also evaluated are
+// refused at the config, naming the key and the file.
+TEST_F(RecordedStudy, DuplicateEmptyAndInSampleFilesAreRefused) {
+  const std::string text = ConfigText();
+  const std::string v1 = "../../../examples/data/multiarm/single/validate_1.csv";
+  const std::string twice =
+      Replace(text, v1, v1 + ", ../../../examples/data/multiarm/single/validate_*.csv");
+  EXPECT_NE(ParseError(twice).find("[scenario.single] data: '"), std::string::npos)
+      << ParseError(twice);
+  EXPECT_NE(ParseError(twice).find("validate_1.csv' is listed twice"), std::string::npos)
+      << ParseError(twice);
+  const std::string in_sample = Replace(text, "train_4.csv", "validate_1.csv");
+  EXPECT_NE(ParseError(in_sample).find("[scenario.single] tune-data: '"), std::string::npos)
+      << ParseError(in_sample);
+  EXPECT_NE(ParseError(in_sample).find("validate_1.csv' is also in data"), std::string::npos)
+      << ParseError(in_sample);
+  TempDir dir;
+  std::ofstream(dir.File("empty.csv")) << "t,theta,omega\n0,,1\n0.001,,1\n";
+  const std::string empty =
+      Replace(text, "../../../examples/data/multiarm/single/validate_1.csv", dir.File("empty.csv"));
+  EXPECT_NE(ParseError(empty).find("empty.csv' has no finite measurement"), std::string::npos)
+      << ParseError(empty);
+}
+
+// Issue 40 item 4: a noise tuning that fails (tune-data shorter than the
+// burn-in) is recorded in tuned.csv and the study exits 1 saying so, also
+// when the complete folder is run again; before, it exited 0.
+TEST_F(RecordedStudy, AFailedTuningMakesTheStudyExitOne) {
+  TempDir dir;
+  const std::string data = std::string(ESTLAB_SOURCE_DIR) + "/examples/data/multiarm/single/";
+  const auto train = SplitLines(ReadFile(data + "train_4.csv"));
+  std::ofstream(dir.File("short.csv")) << train[0] << "\n" << train[1] << "\n" << train[2] << "\n";
+  std::string text = Replace(ConfigText(), "../../../examples/data/multiarm/single/validate_1.csv",
+                             data + "validate_1.csv");
+  text = Replace(text, "../../../examples/data/multiarm/single/train_4.csv", dir.File("short.csv"));
+  std::ofstream(dir.File("s.ini")) << text;
+  for (int pass = 0; pass < 2; ++pass) {
+    const auto r = RunEstlab("study s.ini --out out --quiet", dir.path());
+    EXPECT_EQ(r.exit_code, 1) << pass << "\n" << r.err;
+    EXPECT_NE(r.err.find("estlab: 2 noise tuning(s) failed (out/tuned.csv says why"),
+              std::string::npos)
+        << r.err;
+  }
+  const std::string tuned = ReadFile(dir.File("out/tuned.csv"));
+  EXPECT_NE(tuned.find("single,ekf,tuned,failed,"), std::string::npos) << tuned;
+  EXPECT_NE(tuned.find("not more than the burn-in of 20"), std::string::npos) << tuned;
+}
+
 TEST_F(RecordedStudy, DataFilesAreTheRuns) {
   const std::string text = Replace(ConfigText(), "validate_1.csv", "validate_*.csv");
   const StudyConfig c = ParseStudyConfig(text, kConfig);

@@ -60,11 +60,11 @@ TEST_F(StudySlurm, SubmitsAnArrayAndAMergeThatDependsOnIt) {
   const auto calls = SplitLines(log);
   ASSERT_EQ(calls.size(), 2u) << log;
   const std::string slurm = fs::canonical(dir_.path()).string() + "/res.slurm";
-  EXPECT_EQ(calls[0], "100 --parsable --array=1,2,3 --time=5 " + slurm + "/array.sh");
+  EXPECT_EQ(calls[0], "100 --parsable --array=1,2,3 --output=" + slurm +
+                          "/logs/shard-%a.out --time=5 " + slurm + "/array.sh");
   EXPECT_EQ(calls[1],
-            "101 --parsable --dependency=afterok:100 --kill-on-invalid-dep=yes "
-            "--time=5 " +
-                slurm + "/merge.sh");
+            "101 --parsable --dependency=afterok:100 --kill-on-invalid-dep=yes --output=" + slurm +
+                "/logs/merge.out --time=5 " + slurm + "/merge.sh");
   EXPECT_NE(r.out.find("submitted shard(s) 1,2,3 of 3 as array job 100"), std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("squeue -j 100,101"), std::string::npos) << r.out;
@@ -149,6 +149,67 @@ TEST_F(StudySlurm, BadSlurmOptionsExitTwo) {
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.err.find("'nowhere' is not a study results folder"), std::string::npos)
       << missing.err;
+}
+
+// 'text' for the shell of std::system.
+std::string Quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// A results folder whose path holds a space, quotes, '$', a backquote and
+// non-ASCII letters: sbatch gets each path as one word, and the scripts,
+// run as Slurm would run them, write the merged study there.
+TEST_F(StudySlurm, OddPathsAreQuotedAndTheScriptsRun) {
+  // The stand-in sbatch logs one argument per line.
+  WriteText(dir_.File("bin/sbatch"),
+            "#!/bin/sh\n"
+            "n=$(cat \"$(dirname \"$0\")/next\" 2>/dev/null || echo 100)\n"
+            "for a in \"$@\"; do echo \"[$a]\"; done >> \"$(dirname \"$0\")/sbatch.log\"\n"
+            "echo $((n + 1)) > \"$(dirname \"$0\")/next\"\n"
+            "echo \"$n\"\n");
+  const std::string odd = "we ird 'q' \"dq\" $HOME `id` \xc3\xa9";
+  fs::create_directories(dir_.File(odd));
+  const auto r = Estlab("study s.ini --out " + Quoted(odd + "/res") + " --slurm 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string slurm = fs::canonical(dir_.File(odd)).string() + "/res.slurm";
+  const std::string log = ReadFile(dir_.File("bin/sbatch.log"));
+  EXPECT_NE(log.find("[" + slurm + "/array.sh]\n"), std::string::npos) << log;
+  EXPECT_NE(log.find("[--output=" + slurm + "/logs/shard-%a.out]\n"), std::string::npos) << log;
+  EXPECT_NE(log.find("[" + slurm + "/merge.sh]\n"), std::string::npos) << log;
+  // What Slurm would run: each task, then the merge.
+  for (int k = 1; k <= 3; ++k) {
+    const std::string cmd = "cd / && SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " +
+                            Quoted(slurm + "/array.sh") + " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  const std::string merge = "cd / && bash " + Quoted(slurm + "/merge.sh") + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(merge.c_str()), 0);
+  EXPECT_TRUE(fs::is_regular_file(dir_.File(odd + "/res/summary.csv")));
+  const auto status = Estlab("study --status " + Quoted(odd + "/res") + " --json");
+  EXPECT_NE(status.out.find("\"status\": \"complete\", \"finished_runs\": 6, \"total_runs\": 6"),
+            std::string::npos)
+      << status.out;
+}
+
+// Shell code in --slurm-opts, a newline or '%' in --out: refused before
+// anything is written or run.
+TEST_F(StudySlurm, ShellSyntaxAndControlCharactersAreRefused) {
+  const auto opts =
+      Estlab("study s.ini --out res --slurm 2 --slurm-opts '--time=1 $(touch PWNED); echo x'");
+  EXPECT_EQ(opts.exit_code, 2);
+  EXPECT_NE(opts.err.find("--slurm-opts: shell syntax '$' at character 10"), std::string::npos)
+      << opts.err;
+  const auto newline = Estlab("study s.ini --out 'r\ntouch PWNED\n' --slurm 2 --slurm-dry-run");
+  EXPECT_EQ(newline.exit_code, 2);
+  EXPECT_NE(newline.err.find("holds a control character"), std::string::npos) << newline.err;
+  const auto percent = Estlab("study s.ini --out 'r%j' --slurm 2 --slurm-dry-run");
+  EXPECT_EQ(percent.exit_code, 2);
+  EXPECT_NE(percent.err.find("holds '%'"), std::string::npos) << percent.err;
+  for (const char* left :
+       {"PWNED", "res.slurm", "r\ntouch PWNED\n.slurm", "r%j.slurm", "bin/sbatch.log"})
+    EXPECT_FALSE(fs::exists(dir_.File(left))) << left;
 }
 
 }  // namespace
