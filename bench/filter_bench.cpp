@@ -326,7 +326,7 @@ void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKi
 
 using models::DoublePendulum;
 using models::Pendulum;
-using DpFile = user_models::DoublePendulumFile;
+using DpFile = user_models::DoublePendulumFileModel;
 using Cv = ConstantVelocity2d;
 
 void RegisterAll() {

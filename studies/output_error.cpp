@@ -23,13 +23,17 @@ bool Uneven(const FilterData& d, size_t k, double dt) {
 
 // The data's sampling step; InputError unless evenly sampled.
 double EvenStep(const FilterData& d) {
-  if (d.t.size() < 2) throw InputError(d.path + ": output-error needs at least two rows");
+  // (Output error and --validate's free simulation both come here: the
+  // messages name the windows, not the estimator.)
+  if (d.t.size() < 2)
+    throw InputError(d.path + ": free-simulation windows need at least two rows, the file has " +
+                     std::to_string(d.t.size()));
   const double dt = MeanStep(d);
   for (size_t k = 1; k < d.t.size(); ++k) {
     if (Uneven(d, k, dt))
       throw InputError(d.path + ":" + std::to_string(d.lines[k]) +
-                       ": output-error windows need evenly sampled data (step " + FormatNumber(dt) +
-                       ", here " + FormatNumber(d.t[k] - d.t[k - 1]) +
+                       ": free-simulation windows need evenly sampled data (step " +
+                       FormatNumber(dt) + ", here " + FormatNumber(d.t[k] - d.t[k - 1]) +
                        "); estimate the initial state (--estimate-x0) to simulate the whole "
                        "record instead");
   }

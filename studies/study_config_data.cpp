@@ -16,9 +16,22 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Whether `file` lies in a study's results folder (its own study.state, or
+// that of a folder up to three levels above: timeseries/SCENARIO/run.csv):
+// a study's outputs are never its data, even when a glob reaches them
+// (`data = dd/*/*.csv` with --out dd/res once matched dd/res/runs.csv on
+// the second run).
+bool InResultsFolder(const fs::path& file) {
+  std::error_code ec;
+  fs::path dir = file.parent_path();
+  for (int level = 0; level < 4 && !dir.empty(); ++level, dir = dir.parent_path())
+    if (fs::exists(dir / "study.state", ec)) return true;
+  return false;
+}
+
 // The files of a `data` / `tune-data` value: comma-separated globs relative to
-// the config file's folder, each expanded in sorted order; one that matches
-// nothing is an error naming it.
+// the config file's folder, each expanded in sorted order, files in a study's
+// results folder left out; one that matches nothing is an error naming it.
 std::vector<std::string> ExpandFiles(const SectionValues& v, const std::string& key) {
   const fs::path base = fs::path(v.errors().path()).parent_path();
   std::vector<std::string> files;
@@ -27,9 +40,16 @@ std::vector<std::string> ExpandFiles(const SectionValues& v, const std::string& 
     const fs::path pattern = fs::path(item).is_absolute() ? fs::path(item) : base / item;
     glob_t g{};
     const int rc = ::glob(pattern.string().c_str(), 0, nullptr, &g);
-    for (size_t i = 0; rc == 0 && i < g.gl_pathc; ++i)
+    size_t kept = 0;
+    for (size_t i = 0; rc == 0 && i < g.gl_pathc; ++i) {
+      if (InResultsFolder(g.gl_pathv[i])) continue;
       files.push_back(fs::path(g.gl_pathv[i]).lexically_normal().string());
+      ++kept;
+    }
     ::globfree(&g);
+    if (rc == 0 && kept == 0)
+      v.Fail(key, "'" + item + "' matches only files of a study's results folder (" +
+                      pattern.lexically_normal().string() + ")");
     if (rc != 0)
       v.Fail(key, "no file matches '" + item + "' (looked for " +
                       pattern.lexically_normal().string() + ")");

@@ -96,9 +96,10 @@ std::string ArrayScript(const StudyConfig& config, const SlurmPlan& plan, const 
     << ShellQuote(o.estlab) << " study " << ShellQuote(o.config_path) << " --out "
     << ShellQuote(plan.folder + "/shard-") << "\"$K\" --shard \"$K/" << o.shards
     << "\" --jobs \"${SLURM_CPUS_PER_TASK:-" << cpus << "}\" --quiet || status=$?\n"
-    << "# 1: the shard is complete but a noise tuning failed (its tuned.csv says\n"
-    << "# why): a result like any other, so the merge still runs.\n"
-    << "if [ \"$status\" -eq 1 ]; then exit 0; fi\n"
+    << "# 1 with the shard complete: a noise tuning failed (its tuned.csv says\n"
+    << "# why), a result like any other, so the merge still runs.\n"
+    << "if [ \"$status\" -eq 1 ] && grep -qx 'status = complete' "
+    << ShellQuote(plan.folder + "/shard-") << "\"$K\"/study.state; then exit 0; fi\n"
     << "exit \"$status\"\n";
   return s.str();
 }
@@ -186,7 +187,7 @@ SlurmPlan PlanSlurm(const StudyConfig& config, const std::string& out, const Slu
   }
   std::vector<std::string> merge = {"sbatch", "--parsable"};
   if (!plan.pending_shards.empty()) {
-    merge.push_back("--dependency=afterok:$ARRAY");
+    merge.push_back(kArrayDependency);
     merge.push_back("--kill-on-invalid-dep=yes");
   }
   merge.push_back("--output=" + plan.folder + "/logs/merge.out");
@@ -199,17 +200,18 @@ SlurmPlan PlanSlurm(const StudyConfig& config, const std::string& out, const Slu
 namespace {
 
 // Runs one sbatch command (no shell); returns the job id ("123" of
-// "123;cluster"). Anything else sbatch answers is a failure.
+// "123;cluster" on its stdout). Warnings on its stderr do not matter when
+// it answers an id; anything else is a failure with both in the message.
 std::string Sbatch(const std::vector<std::string>& command) {
-  std::string output;
-  const int status = RunProgram(command, &output);
-  const std::string id = output.substr(0, output.find_first_of(";\n"));
-  const std::string rest = output.substr(std::min(output.size(), output.find('\n')));
-  if (status != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos ||
-      rest.find_first_not_of("\n") != std::string::npos)
-    throw InputError("sbatch failed (exit " + std::to_string(status) +
-                     "): " + (output.empty() ? "no output" : output) +
-                     "\n  command: " + ShellJoin(command));
+  std::string out, err;
+  const int status = RunProgram(command, &out, &err);
+  const std::string first = out.substr(0, out.find('\n'));
+  const std::string id = first.substr(0, first.find(';'));
+  if (status != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos) {
+    const std::string said = out + err;
+    throw InputError("sbatch failed (exit " + std::to_string(status) + "): " +
+                     (said.empty() ? "no output" : said) + "\n  command: " + ShellJoin(command));
+  }
   return id;
 }
 
@@ -220,10 +222,8 @@ void SubmitSlurm(SlurmPlan* plan) {
   size_t next = 0;
   if (!plan->pending_shards.empty()) plan->array_job = Sbatch(plan->commands[next++]);
   std::vector<std::string> merge = plan->commands[next];
-  for (std::string& word : merge) {
-    const auto at = word.find("$ARRAY");
-    if (at != std::string::npos) word.replace(at, 6, plan->array_job);
-  }
+  for (std::string& word : merge)  // our word only: a path may hold "$ARRAY"
+    if (word == kArrayDependency) word = "--dependency=afterok:" + plan->array_job;
   plan->merge_job = Sbatch(merge);
   std::ofstream jobs(plan->folder + "/jobs.txt", std::ios::app);
   jobs << NowUtc() << " array " << (plan->array_job.empty() ? "-" : plan->array_job) << " shards "

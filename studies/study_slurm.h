@@ -39,6 +39,10 @@ struct SlurmOptions {
   bool IsValid(std::string* error) const;
 };
 
+// The merge's dependency on the array job before its id is known (a shell
+// variable where the commands are shown for pasting).
+inline constexpr const char* kArrayDependency = "--dependency=afterok:$ARRAY";
+
 struct SlurmPlan {
   std::string folder;               // OUT.slurm
   std::string out;                  // OUT
@@ -46,8 +50,8 @@ struct SlurmPlan {
   bool merged = false;              // OUT already holds the merged study
   std::string array_script, merge_script;
   // The sbatch commands, word by word (run without a shell; ShellJoin shows
-  // them); the merge's --dependency holds "$ARRAY" until the array's id is
-  // known.
+  // them); the merge's dependency is the word kArrayDependency until the
+  // array's id is known.
   std::vector<std::vector<std::string>> commands;
   std::string array_job, merge_job;  // job ids once submitted ("" = none)
 };

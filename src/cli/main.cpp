@@ -5,6 +5,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,13 @@ int main(int argc, char** argv) {
       // failures, whose rows so far are kept.
       std::cerr << "estlab: error: " << e.what() << "\n";
       return 2;
+    } catch (const std::bad_alloc&) {
+      // A size no check caught (the known ones are refused, exit 2, before
+      // anything is allocated): say what to look at, not "std::bad_alloc".
+      std::cerr << "estlab: error: out of memory: a size given (data rows, particles, "
+                   "smoother trajectories, starts, lags, grid points, study runs or steps) "
+                   "needs more memory than this machine has; make it smaller\n";
+      return 1;
     } catch (const std::exception& e) {
       std::cerr << "estlab: error: " << e.what() << "\n";
       return 1;

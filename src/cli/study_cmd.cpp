@@ -173,7 +173,7 @@ std::string SummaryJson(const std::string& dir, const StudyConfig& config,
 std::string ShownCommand(const std::vector<std::string>& words) {
   std::string line;
   for (const std::string& w : words) {
-    const bool ours = w.find("$ARRAY") != std::string::npos;
+    const bool ours = w == kArrayDependency;
     line += (line.empty() ? "" : " ") + (ours ? w : ShellJoin({w}));
   }
   return line;
@@ -222,7 +222,8 @@ int SubmitToSlurm(const po::variables_map& vm, const StudyConfig& config,
     for (const auto& c : plan.commands) {
       const std::string shown = ShownCommand(c);
       std::cout << "  "
-                << (shown.find("$ARRAY") == std::string::npos && !plan.pending_shards.empty()
+                << (std::find(c.begin(), c.end(), kArrayDependency) == c.end() &&
+                            !plan.pending_shards.empty()
                         ? "ARRAY=$(" + shown + ")"
                         : shown)
                 << "\n";

@@ -1,5 +1,7 @@
 #include "src/io/shell.h"
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -41,24 +43,62 @@ int RunShell(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-int RunProgram(const std::vector<std::string>& argv, std::string* output) {
+namespace {
+
+// Reads both pipes to their ends (poll: a child filling one while this
+// waits on the other would block both).
+void DrainPipes(int out_fd, int err_fd, std::string* out, std::string* err) {
+  pollfd fds[2] = {{out_fd, POLLIN, 0}, {err_fd, POLLIN, 0}};
+  std::string* sinks[2] = {out, err};
+  int open = 2;
+  char buf[512];
+  while (open > 0) {
+    if (::poll(fds, 2, -1) < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || fds[i].revents == 0) continue;
+      const ssize_t n = ::read(fds[i].fd, buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n > 0) {
+        sinks[i]->append(buf, size_t(n));
+      } else {  // end (or an error): this one is done
+        ::close(fds[i].fd);
+        fds[i].fd = -1;
+        --open;
+      }
+    }
+  }
+  for (const pollfd& f : fds)
+    if (f.fd >= 0) ::close(f.fd);
+}
+
+}  // namespace
+
+int RunProgram(const std::vector<std::string>& argv, std::string* out, std::string* err) {
   if (argv.empty()) return 127;
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  int fd[2];
-  if (::pipe(fd) != 0) return -1;
+  int o[2], e[2];
+  if (::pipe2(o, O_CLOEXEC) != 0) return 127;
+  if (::pipe2(e, O_CLOEXEC) != 0) {
+    ::close(o[0]);
+    ::close(o[1]);
+    return 127;
+  }
   const pid_t pid = ::fork();
   if (pid < 0) {
-    ::close(fd[0]);
-    ::close(fd[1]);
-    return -1;
+    for (int fd : {o[0], o[1], e[0], e[1]}) ::close(fd);
+    return 127;
   }
-  if (pid == 0) {  // the child: stdout and stderr into the pipe, then exec
-    ::dup2(fd[1], 1);
-    ::dup2(fd[1], 2);
-    ::close(fd[0]);
-    ::close(fd[1]);
+  if (pid == 0) {  // the child: stdout and stderr into the pipes, then exec
+    // dup2 clears close-on-exec on the copies; the originals close at exec
+    // (a pipe end that is already 1 or 2, the parent's being closed, keeps
+    // its descriptor: clear the flag there).
+    if (o[1] == 1 ? ::fcntl(1, F_SETFD, 0) < 0 : ::dup2(o[1], 1) < 0) _exit(127);
+    if (e[1] == 2 ? ::fcntl(2, F_SETFD, 0) < 0 : ::dup2(e[1], 2) < 0) _exit(127);
     ::execvp(args[0], args.data());
     // Only async-signal-safe calls here (no allocation after fork).
     const char* parts[] = {args[0], ": cannot run it (not found on PATH, or not executable)\n"};
@@ -66,14 +106,9 @@ int RunProgram(const std::vector<std::string>& argv, std::string* output) {
       if (::write(2, p, std::strlen(p)) < 0) break;
     _exit(127);
   }
-  ::close(fd[1]);
-  char buf[512];
-  for (ssize_t n; (n = ::read(fd[0], buf, sizeof buf)) != 0;) {
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) break;
-    output->append(buf, size_t(n));
-  }
-  ::close(fd[0]);
+  ::close(o[1]);
+  ::close(e[1]);
+  DrainPipes(o[0], e[0], out, err);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0)
     if (errno != EINTR) return -1;

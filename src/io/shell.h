@@ -5,7 +5,8 @@
 //
 // Usage:
 //   std::string out;
-//   if (RunProgram({"sbatch", "--parsable", script}, &out) != 0) ... out says why
+//   std::string err;
+//   if (RunProgram({"sbatch", "--parsable", script}, &out, &err) != 0) ... err says why
 //   std::vector<std::string> words;
 //   if (!SplitWords(user_text, &words, &why)) ... why names the character
 #ifndef ESTLAB_IO_SHELL_H_
@@ -28,9 +29,9 @@ std::string ShellJoin(const std::vector<std::string>& words);
 int RunShell(const std::string& command, std::string* output);
 
 // Runs argv[0] (found on PATH) with the arguments argv[1..], no shell in
-// between; *output gets its stdout and stderr. Returns its exit status, 127
-// when it could not be started, -1 when it did not exit normally.
-int RunProgram(const std::vector<std::string>& argv, std::string* output);
+// between; *out gets its stdout, *err its stderr. Returns its exit status,
+// 127 when it could not be started, -1 when it did not exit normally.
+int RunProgram(const std::vector<std::string>& argv, std::string* out, std::string* err);
 
 // Splits `text` at blanks into *words. Refuses (false, *why naming the
 // character and its position) quotes, '$', '`', '\', ';', '&', '|', '<',

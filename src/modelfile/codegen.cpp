@@ -1,5 +1,6 @@
 #include "src/modelfile/codegen.h"
 
+#include <cctype>
 #include <filesystem>
 #include <set>
 #include <vector>
@@ -33,9 +34,35 @@ std::string ArrayMember(int indent, const std::string& type, const std::string& 
 
 std::string Bool(bool b) { return b ? "true" : "false"; }
 
+// A type name given for the model (model source, tests): an identifier that
+// is no keyword, macro-like or reserved spelling, not a name the generated
+// struct uses inside, and not a measurement's ("...Measurement").
 bool UsableTypeName(const std::string& name) {
+  static const std::set<std::string> kGenerated = {"T",
+                                                   "P",
+                                                   "S",
+                                                   "Vec",
+                                                   "Params",
+                                                   "ParamsT",
+                                                   "ParamSpec",
+                                                   "Constraint",
+                                                   "Measurements",
+                                                   "Rhs",
+                                                   "Step",
+                                                   "Eval",
+                                                   "Invariants",
+                                                   "InvariantsHold",
+                                                   "Eigen",
+                                                   "std",
+                                                   "estlab",
+                                                   "ceres",
+                                                   "model_fn",
+                                                   "user_models"};
+  const std::string tail = "Measurement";
+  const bool measurement =
+      name.size() >= tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
   return IsIdentifier(name) && !IsCppKeyword(name) && !LooksLikeMacro(name) &&
-         !IsReservedSpelling(name);
+         !IsReservedSpelling(name) && kGenerated.count(name) == 0 && !measurement;
 }
 
 int StateIndex(const Expr& e) {
@@ -104,16 +131,16 @@ std::string ParamTables(const ModelFile& m) {
          (specs.empty() ? "{};\n" : "{{\n" + specs + "  }};\n");
 }
 
-// Struct names of the measurements: CamelCase, not clashing with the
-// model's own members, C++ spellings or each other.
-std::vector<std::string> MeasurementTypeNames(const ModelFile& m, const std::string& type_name) {
-  std::set<std::string> taken = {
-      type_name,        "Params", "Measurements", "Rhs",        "Step", "Invariants",
-      "InvariantsHold", "Vec",    "ParamSpec",    "Constraint", "T",    "Eigen"};
+// Struct names of the measurements: CamelCase + "Measurement" (numbered
+// when two spell alike: "a-b" and "a_b"). No name the generator uses ends
+// so, and the model's type ends in "Model": they cannot clash.
+std::vector<std::string> MeasurementTypeNames(const ModelFile& m) {
+  std::set<std::string> taken;
   std::vector<std::string> names;
   for (const MeasurementDecl& meas : m.measurements) {
-    std::string base = CamelCase(meas.name);
-    if (base.empty() || taken.count(base) || !UsableTypeName(base)) base += "Measurement";
+    std::string camel = CamelCase(meas.name);  // "_1" -> "1": a letter first
+    if (camel.empty() || std::isdigit(static_cast<unsigned char>(camel[0]))) camel = "M" + camel;
+    const std::string base = camel + "Measurement";
     std::string name = base;
     for (int k = 2; taken.count(name); ++k) name = base + std::to_string(k);
     taken.insert(name);
@@ -176,15 +203,18 @@ std::string GenerateModelHeader(const ModelFile& m, const std::string& cpp_type_
     invariant_names.push_back(CppStringLiteral(inv.name));
   out += ArrayMember(2, "const char*", "kInvariantNames", invariant_names) +
          InvariantFunctions(m, 2) + "\n";
-  const std::vector<std::string> types = MeasurementTypeNames(m, cpp_type_name);
+  const std::vector<std::string> types = MeasurementTypeNames(m);
   for (size_t i = 0; i < m.measurements.size(); ++i)
     out += MeasurementStruct(m, m.measurements[i], types[i]);
   out += "  using Measurements = std::tuple<" + Join(types) + ">;\n};\n\n";
   return out + "}  // namespace estlab::user_models\n\n#endif  // " + guard + "\n";
 }
 
+// CamelCase + "Model": no name the generator uses (Vec, Params, Rhs,
+// Measurements, ...) or a header's macro ends so ("rhs" once gave a struct
+// Rhs holding a function Rhs).
 std::string DefaultTypeName(const ModelFile& m) {
-  const std::string name = CamelCase(m.name);
+  const std::string name = CamelCase(m.name) + "Model";
   return UsableTypeName(name) ? name : "Model";
 }
 

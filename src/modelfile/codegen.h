@@ -5,7 +5,7 @@
 //
 // Usage:
 //   const ModelFile m = ParseModelFile(text, "pendulum.model");
-//   const std::string header = GenerateModelHeader(m, DefaultTypeName(m));  // "PendulumFile"
+//   const std::string header = GenerateModelHeader(m, DefaultTypeName(m));  // "PendulumFileModel"
 //   // write it to pendulum_file.h; it includes "src/core/params.h",
 //   // "src/core/types.h" and "src/modelfile/model_functions.h".
 //
@@ -51,8 +51,8 @@ namespace estlab::modelfile {
 // (it must come from ParseModelFile).
 std::string GenerateModelHeader(const ModelFile& m, const std::string& cpp_type_name);
 
-// CamelCase of the model name ("pendulum-file" -> "PendulumFile"); "Model"
-// when that is not a usable identifier.
+// CamelCase of the model name + "Model" ("pendulum-file" ->
+// "PendulumFileModel"); "Model" when that is not a usable identifier.
 std::string DefaultTypeName(const ModelFile& m);
 
 }  // namespace estlab::modelfile

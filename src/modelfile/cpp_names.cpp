@@ -84,18 +84,9 @@ bool LooksLikeMacro(std::string_view name) {
                       [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
 }
 
-std::string LocalName(const std::string& name) {
-  static const std::set<std::string, std::less<>> kGenerated = {
-      "T",   "t",   "x",      "u",     "p",     "dt",  "dx",     "next",    "z",
-      "inv", "std", "estlab", "ceres", "Eigen", "Vec", "Params", "model_fn"};
-  const bool clash = IsCppKeyword(name) || LooksLikeMacro(name) || kGenerated.count(name) > 0;
-  return clash ? name + "_" : name;
-}
+std::string LocalName(const std::string& name) { return kValuePrefix + name; }
 
-std::string MemberName(const std::string& name) {
-  const bool clash = IsCppKeyword(name) || LooksLikeMacro(name) || name == "Params";
-  return clash ? name + "_" : name;
-}
+std::string MemberName(const std::string& name) { return kValuePrefix + name; }
 
 std::string CamelCase(std::string_view name) {
   std::string out;

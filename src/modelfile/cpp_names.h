@@ -3,8 +3,8 @@
 // generator's own variables, struct names, string and double literals.
 //
 // Usage:
-//   LocalName("theta") -> "theta";   LocalName("x") -> "x_" (x is the state vector)
-//   MemberName("int")  -> "int_";    CamelCase("angle-rate") -> "AngleRate"
+//   LocalName("theta") -> "v_theta";   MemberName("int") -> "v_int"
+//   CamelCase("angle-rate") -> "AngleRate"
 //   CppStringLiteral("a\"b") -> "\"a\\\"b\"";   FormatDouble(2) -> "2.0"
 #ifndef ESTLAB_MODELFILE_CPP_NAMES_H_
 #define ESTLAB_MODELFILE_CPP_NAMES_H_
@@ -20,15 +20,17 @@ bool IsCppKeyword(std::string_view name);
 // and other spellings a C++ header cannot safely use as a variable.
 bool LooksLikeMacro(std::string_view name);
 
-// A user identifier as a local variable of a generated function: unchanged
-// unless it is a keyword, a macro-like name or one of the generator's names
-// (T, t, x, u, p, dt, dx, next, z, inv, std, estlab, ceres, Eigen, Vec,
-// Params, model_fn), which get a trailing '_'. User names never end in '_'
-// (names.h), so the result is unique.
+// Every user name (state, parameter, let, input) is spelled in the generated
+// C++ behind this prefix: no keyword, macro of the headers the model is
+// compiled with (a test lists them with `g++ -dM -E`) or name of the
+// generator's own (T, P, S, x, u, p, dt, Vec, Params, ...) begins with it,
+// so no user name can collide with one, whatever its spelling.
+inline constexpr const char* kValuePrefix = "v_";
+
+// A user identifier as a local variable of a generated function: "v_" + name.
 std::string LocalName(const std::string& name);
 
-// A parameter as a member of the generated Params struct: unchanged unless
-// it is a keyword, macro-like or "Params", which get a trailing '_'.
+// A parameter as a member of the generated Params struct: "v_" + name.
 std::string MemberName(const std::string& name);
 
 // "angle-rate" -> "AngleRate", "x_theta" -> "XTheta"; "" for no letters.

@@ -3,9 +3,9 @@
 //   identifier   [A-Za-z_][A-Za-z0-9_]*     states, parameters, lets, outputs
 //   dashed name  [A-Za-z_][A-Za-z0-9_-]*    model and measurement names
 //
-// Names ending in '_' or containing "__" are reserved: the C++ generator
-// appends '_' to user names that would collide with C++ keywords, macros or
-// its own variables (cpp_names.h), and must not collide with a user name.
+// Names ending in '_' or containing "__" are reserved for the generated C++
+// (cpp_names.h spells every user name "v_NAME"; "__" is reserved to the
+// C++ implementation).
 //
 // Usage:
 //   DidYouMean("omgea", {"theta", "omega"})  ->  "; did you mean 'omega'?"

@@ -156,14 +156,25 @@ void EnsureSnapshot(const fs::path& dir, const std::string& text) {
   WriteAtomically(header, text);
 }
 
+// Whether `path` was last written more than an hour ago: older than any
+// compile (minutes), so a file of a compile that another machine sharing
+// the cache runs now (its pid means nothing here) is never taken for a
+// leftover.
+bool OlderThanAnHour(const fs::path& path) {
+  std::error_code ec;
+  const auto written = fs::last_write_time(path, ec);
+  return !ec && fs::file_time_type::clock::now() - written > std::chrono::hours(1);
+}
+
 // Removes what killed compiles left in `dir`: NAME.PID.tmp.{cpp,so,log}
-// (and model.h.tmp.PID) of processes that no longer run.
+// (and model.h.tmp.PID) of processes that no longer run here, written more
+// than an hour ago.
 void RemoveLeftovers(const fs::path& dir) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
     const size_t tmp = name.find(".tmp");
-    if (tmp == std::string::npos) continue;
+    if (tmp == std::string::npos || !OlderThanAnHour(e.path())) continue;
     // The pid: the digits before ".tmp" (entry.123.tmp.cpp) or after it
     // (model.h.tmp.123).
     auto is_pid = [](const std::string& t) {
@@ -176,6 +187,27 @@ void RemoveLeftovers(const fs::path& dir) {
     const long pid = std::strtol(digits.c_str(), nullptr, 10);
     if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
   }
+}
+
+// Whether `dir` holds the unit of a compile in progress (NAME.PID.tmp.cpp,
+// written within the hour); this process's own are removed before it asks.
+bool OtherCompileRunning(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > 8 && name.compare(name.size() - 8, 8, ".tmp.cpp") == 0 &&
+        !OlderThanAnHour(e.path()))
+      return true;
+  }
+  return false;
+}
+
+// A file's text, or "" (and never an exception) when it cannot be read.
+std::string ReadIfReadable(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  return text.str();
 }
 
 // Compiles `source` (a translation unit) into `library` unless it exists.
@@ -227,14 +259,15 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
     fs::remove(so, ec);
     fs::remove(log, ec);
     // Nothing of a failed compile stays: the snapshot (written again on the
-    // next use) and the folder once empty.
-    if (!fs::exists(dir / "entry.so", ec)) {
+    // next use) and the folder once empty; not while another compile of
+    // this key (its NAME.PID.tmp.cpp) still reads the snapshot.
+    if (!fs::exists(dir / "entry.so", ec) && !OtherCompileRunning(dir)) {
       fs::remove(dir / "model.h", ec);
       fs::remove(dir, ec);  // only when empty
     }
     throw InputError("model " + s.path + " does not compile:" + Head(output, 20));
   }
-  if (ReadModelText((dir / "model.h").string()) != snapshot) {
+  if (ReadIfReadable(dir / "model.h") != snapshot) {  // gone or changed
     fs::remove(cpp, ec);
     fs::remove(so, ec);
     fs::remove(log, ec);

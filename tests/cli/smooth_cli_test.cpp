@@ -127,7 +127,7 @@ TEST(SmoothCli, BadInputExitsTwoWithoutOutput) {
   ASSERT_EQ(RunEstlab(kPendulumSimulate, dir.path()).exit_code, 0);
   const std::pair<std::string, std::string> cases[] = {
       {kSmoothArgs + "--filter pf --smoother-trajectories 1 --out e.csv",
-       "--smoother-trajectories must be at least 2, got 1"},
+       "--smoother-trajectories must be in 2..100000, got 1"},
       {kSmoothArgs + "--filter bogus --out e.csv", "bogus"},
       {"smooth --model pendulum --measure sin --data nothere.csv --q-diag 1,1 --r-diag 1 --out "
        "e.csv",

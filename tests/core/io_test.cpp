@@ -1,7 +1,10 @@
 // CSV reading, JSON writing, chi-square bounds and the deterministic RNG.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <set>
 
 #include "error_text.h"
@@ -80,8 +83,23 @@ TEST(CsvReader, RefusesDirectoriesAndEndlessFiles) {
     ReadCsv("/dev/zero");
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "/dev/zero:1: line longer than 1048576 bytes");
+    // A device is never data (issue 40 item 17: a FIFO blocked forever).
+    EXPECT_STREQ(e.what(),
+                 "data file '/dev/zero' is not a regular file (a FIFO, socket or device); give a "
+                 "file");
   }
+  // An endless line in a regular file: refused at the cap.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("estlab_long_" + std::to_string(::getpid())))
+          .string();
+  std::ofstream(path) << "t,x\n" << std::string(1100000, '1') << "\n";
+  try {
+    ReadCsv(path);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":2: line longer than 1048576 bytes");
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(CellForDisplay, FormatsNumbersAndNeverCutsThem) {

@@ -6,14 +6,20 @@
 // models/double_pendulum.h.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
+#include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "src/modelfile/codegen.h"
 #include "src/modelfile/cpp_names.h"
+#include "src/modelfile/diagnostic.h"
 #include "src/modelfile/model_file.h"
 
 #ifndef ESTLAB_SOURCE_DIR
@@ -45,7 +51,7 @@ std::string HeaderOfExample(const std::string& file, const std::string& type) {
 // vector (x), a parameter named like a keyword (int), double and T lets, an
 // unused let, every kind of power, helper functions, mixed-type arguments,
 // an input, measurement names whose structs would collide (x-theta and
-// x_theta are both XTheta; Params is taken).
+// x_theta are both XThetaMeasurement; params is ParamsMeasurement).
 const char* const kFeatures = R"([model]
 name = features
 description = quote " and backslash \ here
@@ -91,30 +97,30 @@ TEST(Codegen, HeaderHasTheBuiltInForm) {
       "static constexpr std::array<const char*, 2> kStateUnits = {\"m\", \"m/s\"};",
       "static constexpr std::array<bool, 2> kAngleStates = {false, false};",
       "static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};",
-      "    S k = S(2.0);\n    S int_ = S(0.5);\n",
-      "{\"k\", &Params::k, \"k [1/s]\", Constraint::kPositive},",
-      "{\"int\", &Params::int_, \"int\", Constraint::kAny},",
+      "    S v_k = S(2.0);\n    S v_int = S(0.5);\n",
+      "{\"k\", &Params::v_k, \"k [1/s]\", Constraint::kPositive},",
+      "{\"int\", &Params::v_int, \"int\", Constraint::kAny},",
       "static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double u, const P& p) {",
       "    using std::atan2;\n    using std::pow;\n    using std::sin;\n"
-      "    const T& x_ = x(0);\n    const T& v = x(1);\n"
-      "    const auto a11 = p.k + p.int_;\n    const T s = sin(x_);\n",
-      "dx(0) = v;",
-      "dx(1) = -p.k * (x_ * x_) + model_fn::Square(x_ + 1.0) - pow(v, 2.5) + "
-      "model_fn::PowT(T(p.k), v) + model_fn::Asin(s) + atan2(v, T(1.0)) + model_fn::Min(v, "
-      "T(p.k)) + u * a11 + (v * v * v);",
+      "    const T& v_x = x(0);\n    const T& v_v = x(1);\n"
+      "    const auto v_a11 = p.v_k + p.v_int;\n    const T v_s = sin(v_x);\n",
+      "dx(0) = v_v;",
+      "dx(1) = -p.v_k * (v_x * v_x) + model_fn::Square(v_x + 1.0) - pow(v_v, 2.5) + "
+      "model_fn::PowT(T(p.v_k), v_v) + model_fn::Asin(v_s) + atan2(v_v, T(1.0)) + "
+      "model_fn::Min(v_v, T(p.v_k)) + u * v_a11 + (v_v * v_v * v_v);",
       "static constexpr std::array<const char*, 1> kInvariantNames = {\"e\"};",
-      "static bool InvariantsHold(const Params& p, double u) { return p.k == 0.0 && u == 0.0; }",
+      "static bool InvariantsHold(const Params& p, double u) { return p.v_k == 0.0 && u == 0.0; }",
       "static Vec<double, 1> Invariants(const Vec<double, 2>& x, const Params& p) {\n"
-      "    const double x_ = x(0);\n    const double v = x(1);\n",
-      "inv(0) = (v * v) + p.k * (x_ * x_);",
-      "struct XTheta {",
-      "struct XThetaMeasurement {\n    static constexpr const char* kName = \"x_theta\";",
+      "    const double v_x = x(0);\n    const double v_v = x(1);\n",
+      "inv(0) = (v_v * v_v) + p.v_k * (v_x * v_x);",
+      "struct XThetaMeasurement {",
+      "struct XThetaMeasurement2 {\n    static constexpr const char* kName = \"x_theta\";",
       "static constexpr std::array<bool, 1> kAngleOutputs = {true};",
       "static Vec<T, 1> Eval(const Vec<T, 2>& /*x*/, const P& p) {",
-      "z(0) = T(p.k);",
+      "z(0) = T(p.v_k);",
       "struct ParamsMeasurement {",
-      "z(0) = -(-v);",
-      "using Measurements = std::tuple<XTheta, XThetaMeasurement, ParamsMeasurement>;",
+      "z(0) = -(-v_v);",
+      "using Measurements = std::tuple<XThetaMeasurement, XThetaMeasurement2, ParamsMeasurement>;",
       "}  // namespace estlab::user_models",
   };
   for (const char* e : expected) EXPECT_NE(h.find(e), std::string::npos) << e << "\nin:\n" << h;
@@ -128,16 +134,16 @@ TEST(Codegen, PendulumRhsIsTheBuiltInsExpression) {
                    "  static Vec<T, 2> Rhs(const T& /*t*/, const Vec<T, 2>& x, double /*u*/, "
                    "const P& p) {\n"
                    "    using std::sin;\n"
-                   "    const T& theta = x(0);\n"
-                   "    const T& omega = x(1);\n"
+                   "    const T& v_theta = x(0);\n"
+                   "    const T& v_omega = x(1);\n"
                    "    Vec<T, 2> dx;\n"
-                   "    dx(0) = omega;\n"
-                   "    dx(1) = -(p.g / p.L) * sin(theta) - p.b * omega;\n"
+                   "    dx(0) = v_omega;\n"
+                   "    dx(1) = -(p.v_g / p.v_L) * sin(v_theta) - p.v_b * v_omega;\n"
                    "    return dx;\n"
                    "  }\n"),
             std::string::npos)
       << h;
-  EXPECT_NE(h.find("return p.b == 0.0;"), std::string::npos);
+  EXPECT_NE(h.find("return p.v_b == 0.0;"), std::string::npos);
 }
 
 TEST(Codegen, StepModelsHaveStepAndNoRhs) {
@@ -147,7 +153,7 @@ TEST(Codegen, StepModelsHaveStepAndNoRhs) {
                    "double /*u*/, const P& /*p*/) {"),
             std::string::npos)
       << h;
-  EXPECT_NE(h.find("next(0) = pos + dt * vel;"), std::string::npos);
+  EXPECT_NE(h.find("next(0) = v_pos + dt * v_vel;"), std::string::npos);
   EXPECT_NE(h.find("kPositionRatePairs = {{{0, 1}}};"), std::string::npos);  // pos + dt * vel
   EXPECT_EQ(h.find("Rhs("), std::string::npos);
   // No invariants: InvariantsHold is false, as in models/van_der_pol.h.
@@ -158,13 +164,15 @@ TEST(Codegen, StepModelsHaveStepAndNoRhs) {
 TEST(Codegen, MultiarmPairsAndTypeNames) {
   const std::string h = HeaderOfExample("multiarm_double_pendulum.model", "MultiarmDouble");
   EXPECT_NE(h.find("kPositionRatePairs = {{{0, 2}, {1, 3}}};"), std::string::npos);
-  EXPECT_NE(h.find("const auto M11 = "), std::string::npos);  // params only: their scalar
-  EXPECT_NE(h.find("const T M12 = coupling * cos(phi1 - phi2);"), std::string::npos);
+  EXPECT_NE(h.find("const auto v_M11 = "), std::string::npos);  // params only: their scalar
+  EXPECT_NE(h.find("const T v_M12 = v_coupling * cos(v_phi1 - v_phi2);"), std::string::npos);
   const ModelFile m = ParseModelFile(ReadFile(kSourceDir + "/examples/models/linear_cv.model"), "");
-  EXPECT_EQ(DefaultTypeName(m), "LinearCv");
+  EXPECT_EQ(DefaultTypeName(m), "LinearCvModel");
   EXPECT_THROW(GenerateModelHeader(m, "int"), InputError);
   EXPECT_THROW(GenerateModelHeader(m, "2x"), InputError);
   EXPECT_THROW(GenerateModelHeader(m, "NULL"), InputError);
+  EXPECT_THROW(GenerateModelHeader(m, "Rhs"), InputError);  // the struct would hold Rhs()
+  EXPECT_THROW(GenerateModelHeader(m, "AngleMeasurement"), InputError);
 }
 
 TEST(Codegen, CppSpellings) {
@@ -176,14 +184,10 @@ TEST(Codegen, CppSpellings) {
   EXPECT_EQ(std::strtod(FormatDouble(0.15 * 0.17 * 0.17 / 12).c_str(), nullptr),
             0.15 * 0.17 * 0.17 / 12);
   EXPECT_EQ(CppStringLiteral("a\"b\\c\n\xc3\xa9"), "\"a\\\"b\\\\c\\012\\303\\251\"");
-  EXPECT_EQ(LocalName("theta"), "theta");
-  EXPECT_EQ(LocalName("x"), "x_");
-  EXPECT_EQ(LocalName("T"), "T_");
-  EXPECT_EQ(LocalName("M_PI"), "M_PI_");
-  EXPECT_EQ(LocalName("EOF"), "EOF_");
-  EXPECT_EQ(LocalName("M12"), "M12");
-  EXPECT_EQ(MemberName("x"), "x");
-  EXPECT_EQ(MemberName("class"), "class_");
+  EXPECT_EQ(LocalName("theta"), "v_theta");
+  EXPECT_EQ(LocalName("x"), "v_x");
+  EXPECT_EQ(LocalName("NDEBUG"), "v_NDEBUG");
+  EXPECT_EQ(MemberName("class"), "v_class");
   EXPECT_EQ(CamelCase("angle-rate"), "AngleRate");
   EXPECT_EQ(UpperSnakeCase("PendulumFile"), "PENDULUM_FILE");
 }
@@ -233,19 +237,17 @@ class CompiledHeaders : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-const char* const kInstantiateAll = R"(
+// Instantiates a generated model M for double, Jet and NestedJet (with
+// double parameters and with parameters of the state's scalar): All<M>().
+const char* const kInstantiateHelpers = R"(
 #include <ceres/jet.h>
 #include <tuple>
 
 #include "models/model.h"
 #include "models/model_params.h"
 #include "src/ode/nested_jet.h"
-#include "pendulum.model.h"
-#include "double_pendulum.model.h"
-#include "multiarm_single_pendulum.model.h"
-#include "multiarm_double_pendulum.model.h"
-#include "linear_cv.model.h"
 
+namespace estlab::user_models {}  // the headers come after
 namespace um = estlab::user_models;
 
 template <class M, class T, class P>
@@ -283,6 +285,15 @@ void All() {
   (void)M::InvariantsHold(typename M::Params{}, 0.0);
 }
 
+)";
+
+const std::string kInstantiateAll = std::string(kInstantiateHelpers) + R"(
+#include "pendulum.model.h"
+#include "double_pendulum.model.h"
+#include "multiarm_single_pendulum.model.h"
+#include "multiarm_double_pendulum.model.h"
+#include "linear_cv.model.h"
+
 static_assert(estlab::DynamicModel<um::PendulumFile>);
 static_assert(estlab::DynamicModel<um::DoublePendulumFile>);
 static_assert(estlab::DynamicModel<um::MultiarmSinglePendulum>);
@@ -307,6 +318,205 @@ int main() {
 TEST_F(CompiledHeaders, EveryExampleCompilesForDoubleJetAndNestedJet) {
   std::string log;
   EXPECT_TRUE(Build(kInstantiateAll, false, &log)) << log;
+}
+
+// ---- Every name `model check` accepts compiles (issue 40, done-when 3) ----
+
+// The macros defined by the headers a model is compiled with (as the plugin
+// compiles it: -DNDEBUG), from `g++ -dM -E`.
+std::vector<std::string> PreambleMacros(const std::filesystem::path& dir) {
+  WriteFile(dir / "preamble.cpp", std::string(kInstantiateHelpers) +
+                                      "#include \"src/modelfile/model_functions.h\"\n"
+                                      "#include \"src/core/params.h\"\n#include <array>\n"
+                                      "#include <cmath>\n#include <utility>\n");
+  const std::string out = (dir / "macros.txt").string();
+  const std::string command = "g++ -std=c++20 -dM -E -DNDEBUG -I" + kSourceDir +
+                              " -isystem /usr/include/eigen3 -DEIGEN_MPL2_ONLY " +
+                              (dir / "preamble.cpp").string() + " > " + out + " 2>&1";
+  EXPECT_EQ(std::system(command.c_str()), 0) << ReadFile(out);
+  std::vector<std::string> names;
+  std::istringstream lines(ReadFile(out));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("#define ", 0) != 0) continue;
+    const std::string name = line.substr(8, line.find_first_of(" (", 8) - 8);
+    names.push_back(name);
+  }
+  return names;
+}
+
+constexpr int kModelNameLine = -2, kMeasurementLine = -3, kOutputLine = -4;
+
+// One declared name of a generated model file and the line it is on.
+struct Decl {
+  enum Kind { kState, kParam, kLet, kInput } kind;
+  std::string name;
+};
+
+// A model file of `decls` (states get -x dynamics, lets chain through the
+// parameters, the first state's rhs uses the last let and the input) and,
+// per line, the index of the declaration it belongs to (-1: none).
+std::string ModelText(const std::string& model_name, const std::vector<Decl>& decls,
+                      const std::string& meas, const std::string& output, std::vector<int>* owner) {
+  std::vector<std::string> lines;
+  auto add = [&](const std::string& line, int who) {
+    lines.push_back(line);
+    owner->push_back(who);
+  };
+  owner->clear();
+  std::vector<int> states, params, lets;
+  int input = -1;
+  for (int i = 0; i < int(decls.size()); ++i) {
+    if (decls[i].kind == Decl::kState) states.push_back(i);
+    if (decls[i].kind == Decl::kParam) params.push_back(i);
+    if (decls[i].kind == Decl::kLet) lets.push_back(i);
+    if (decls[i].kind == Decl::kInput) input = i;
+  }
+  add("[model]", -1);
+  add("name = " + model_name, kModelNameLine);
+  if (input >= 0) add("input = " + decls[size_t(input)].name, input);
+  add("[states]", -1);
+  for (int i : states) add(decls[size_t(i)].name + " = [m]", i);
+  add("[params]", -1);
+  for (int i : params) add(decls[size_t(i)].name + " = 0.5", i);
+  add("[let]", -1);
+  std::string previous = decls[size_t(states[0])].name;
+  for (size_t k = 0; k < lets.size(); ++k) {
+    const std::string p = params.empty() ? "1" : decls[size_t(params[k % params.size()])].name;
+    add(decls[size_t(lets[k])].name + " = " + previous + " + " + p, lets[k]);
+    previous = decls[size_t(lets[k])].name;
+  }
+  add("[rhs]", -1);
+  for (size_t k = 0; k < states.size(); ++k) {
+    const std::string& x = decls[size_t(states[k])].name;
+    std::string rhs = "-" + x;
+    if (k == 0) rhs += " + 1e-9 * " + previous;
+    if (k == 0 && input >= 0) rhs += " + " + decls[size_t(input)].name;
+    add(x + " = " + rhs, states[k]);
+  }
+  add("[measurement " + meas + "]", kMeasurementLine);
+  add(output + " = " + decls[size_t(states[0])].name, kOutputLine);
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+  return text;
+}
+
+// The model of `decls` once `model check` accepts it: every refusal must
+// name t.model:LINE:COL; the declaration on that line goes (or the model,
+// measurement or output name is replaced), and the file is checked again.
+ModelFile Accepted(std::vector<Decl>* decls, std::string* model_name, std::string* meas,
+                   std::string* output) {
+  for (int round = 0; round < 40; ++round) {
+    std::vector<int> owner;
+    const std::string text = ModelText(*model_name, *decls, *meas, *output, &owner);
+    try {
+      return ParseModelFile(text, "t.model");
+    } catch (const ModelFileError& e) {
+      std::set<int> drop;
+      std::istringstream lines(e.what());
+      for (std::string line; std::getline(lines, line);) {
+        int at = 0, col = 0;
+        EXPECT_EQ(std::sscanf(line.c_str(), "t.model:%d:%d: ", &at, &col), 2) << line;
+        if (!(at >= 1 && at <= int(owner.size()) && col >= 1)) {
+          ADD_FAILURE() << "no FILE:LINE:COL: " << line;
+          return {};
+        }
+        const int who = owner[size_t(at - 1)];
+        const std::string fresh = std::to_string(round);
+        drop.insert(who);
+        if (who == kModelNameLine) *model_name = "m" + fresh;
+        if (who == kMeasurementLine) *meas = "meas" + fresh;
+        if (who == kOutputLine) *output = "out" + fresh;
+      }
+      for (auto it = drop.rbegin(); it != drop.rend() && *it >= 0; ++it) {
+        const bool last_state = (*decls)[size_t(*it)].kind == Decl::kState &&
+                                std::count_if(decls->begin(), decls->end(), [](const Decl& d) {
+                                  return d.kind == Decl::kState;
+                                }) == 1;
+        if (last_state)
+          (*decls)[size_t(*it)].name = "s" + std::to_string(round);
+        else
+          decls->erase(decls->begin() + *it);
+      }
+    }
+  }
+  ADD_FAILURE() << "not accepted after 40 rounds";
+  return {};
+}
+
+TEST_F(CompiledHeaders, EveryNameCheckAcceptsCompiles) {
+  const std::vector<std::string> macros = PreambleMacros(dir_);
+  ASSERT_GT(macros.size(), 500u);
+  // The spellings the generated C++ adds to a user's names start or end with
+  // text no macro does.
+  for (const std::string& m : macros) {
+    EXPECT_NE(m.rfind(kValuePrefix, 0), 0u) << m;
+    for (const std::string tail : {"Model", "Measurement"})
+      EXPECT_FALSE(m.size() >= tail.size() &&
+                   m.compare(m.size() - tail.size(), tail.size(), tail) == 0)
+          << m;
+  }
+  std::vector<std::string> pool = {
+      // keywords
+      "int", "class", "double", "return", "template", "typename", "using", "namespace", "auto",
+      "const", "static", "struct", "new", "delete", "this", "true", "false", "operator", "and",
+      "or", "not", "bool", "char", "long", "void", "volatile", "virtual", "concept", "requires",
+      "co_await", "import", "module", "final", "override", "asm", "register", "typeid",
+      // the generator's own names and estlab's
+      "T", "P", "S", "x", "u", "p", "z", "dx", "next", "inv", "std", "estlab", "ceres", "Eigen",
+      "Vec", "Params", "ParamsT", "ParamSpec", "Constraint", "Measurements", "Rhs", "Step", "Eval",
+      "Invariants", "InvariantsHold", "model_fn", "user_models", "kName", "kParams", "kStateDim",
+      "kDim", "kOutputs", "Mat", "Jet", "NestedJet", "Model", "params", "vec", "constraint", "rhs",
+      "measurements", "params_t", "param_spec",
+      // reserved by the language (check refuses them: FILE:LINE:COL)
+      "t", "dt", "pi", "sin", "exp", "max", "a__b", "w_"};
+  for (const std::string& m : macros)
+    if (!m.empty() && m.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                          "0123456789_") == std::string::npos)
+      pool.push_back(m);
+  std::sort(pool.begin(), pool.end());
+  pool.erase(std::unique(pool.begin(), pool.end()), pool.end());
+
+  // Every name of the pool once, in models of up to 16 states and 16
+  // parameters (more and the parameters-of-T path tune compiles would be
+  // skipped) and 100 lets, six models per compile.
+  std::mt19937 rng(1);
+  std::shuffle(pool.begin(), pool.end(), rng);
+  size_t next = 0;
+  auto take = [&] { return pool[next++ % pool.size()]; };
+  std::set<std::string> types;
+  for (int program = 0; next < pool.size(); ++program) {
+    std::string includes, calls;
+    for (int k = 0; k < 6 && next < pool.size(); ++k) {
+      const int n = int(types.size());
+      const int states = 1 + int(rng() % kMaxStates);
+      std::vector<Decl> decls;
+      for (int i = 0; i < states; ++i) decls.push_back({Decl::kState, take()});
+      decls.push_back({Decl::kInput, take()});
+      for (int i = 0; i < 1 + int(rng() % 16); ++i) decls.push_back({Decl::kParam, take()});
+      for (int i = 0; i < 100; ++i) decls.push_back({Decl::kLet, take()});
+      std::string model_name = take(), meas = take(), output = take();
+      if (n % 2 == 0) std::replace(meas.begin(), meas.end(), '_', '-');  // both spellings
+      std::replace(model_name.begin(), model_name.end(), '_', '-');
+      ModelFile m;
+      ASSERT_NO_FATAL_FAILURE(m = Accepted(&decls, &model_name, &meas, &output));
+      if (types.count(DefaultTypeName(m))) {  // two names of one CamelCase
+        model_name = "model-" + std::to_string(n);
+        ASSERT_NO_FATAL_FAILURE(m = Accepted(&decls, &model_name, &meas, &output));
+      }
+      const std::string type = DefaultTypeName(m);
+      types.insert(type);
+      const std::string header = "prop" + std::to_string(n) + ".h";
+      WriteFile(dir_ / header, GenerateModelHeader(m, type));
+      includes += "#include \"" + header + "\"\n";
+      calls += "  All<um::" + type + ">();\n";
+    }
+    std::string log;
+    EXPECT_TRUE(
+        Build(std::string(kInstantiateHelpers) + includes + "int main() {\n" + calls + "}\n", false,
+              &log))
+        << "program " << program << ":\n"
+        << includes << log.substr(0, 4000);
+  }
 }
 
 // Exits 0 when the generated models match the built-ins bit for bit: Rhs in

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -302,13 +303,21 @@ TEST(ModelFile, CacheFolderPathIsNeverCompiledAndTheKeyIgnoresHowTheFileIsNamed)
   ::waitpid(child, nullptr, 0);
   const std::string folder = fs::path(header).parent_path().string(),
                     stale = folder + "/entry." + std::to_string(child) + ".tmp";
-  for (const char* ext : {".cpp", ".log"}) std::ofstream(stale + ext) << "left\n";
+  for (const char* ext : {".cpp", ".log"}) {  // written two hours ago
+    std::ofstream(stale + ext) << "left\n";
+    fs::last_write_time(stale + ext, fs::file_time_type::clock::now() - std::chrono::hours(2));
+  }
+  // A fresh one may be another machine's compile in progress (a shared
+  // cache): it stays.
+  const std::string fresh = folder + "/tune." + std::to_string(child) + ".tmp.log";
+  std::ofstream(fresh) << "running elsewhere\n";
   const RunResult edited = Est("model build R/edited.model --json", dir.path(), odd);
   ASSERT_EQ(edited.exit_code, 0) << edited.err;
   EXPECT_NE(edited.out.find("\"compiled_entry\": true"), std::string::npos) << edited.out;
   EXPECT_EQ(ReadFile(header), original);
   EXPECT_FALSE(fs::exists(stale + ".cpp"));
   EXPECT_FALSE(fs::exists(stale + ".log"));
+  EXPECT_TRUE(fs::exists(fresh));
 }
 
 TEST(ModelFile, HeaderWithATypeErrorExits2AndLeavesNothing) {

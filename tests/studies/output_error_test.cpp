@@ -174,7 +174,19 @@ TEST(OutputError, RejectsDataItCannotUse) {
   uneven.t[7] += 0.004;
   std::string e =
       testing::ErrorText([&] { FitOutputError(model, Spec(0.8, 0.1), estimate, {uneven}, {}); });
-  EXPECT_NE(e.find("sim.csv:9: output-error windows need evenly sampled data"), std::string::npos)
+  EXPECT_NE(e.find("sim.csv:9: free-simulation windows need evenly sampled data"),
+            std::string::npos)
+      << e;
+  // One row: the windows' message, not the estimator's (issue 40 item 19:
+  // --validate onerow.csv spoke of output-error).
+  FilterData one = Pendulum(0.0, 1.0);
+  one.t.resize(1);
+  one.z.resize(1);
+  one.truth.resize(2);
+  one.lines.resize(1);
+  e = testing::ErrorText([&] { FreeSimulationRmse(model, Spec(0.8, 0.1), one, 0.5); });
+  EXPECT_NE(e.find("sim.csv: free-simulation windows need at least two rows, the file has 1"),
+            std::string::npos)
       << e;
   // Without state columns the windows have no start: FreeSimulationRmse says
   // so; the fit simulates the whole record from x0 instead (next test).

@@ -103,6 +103,30 @@ TEST_F(RecordedStudy, AFailedTuningMakesTheStudyExitOne) {
   EXPECT_NE(tuned.find("not more than the burn-in of 20"), std::string::npos) << tuned;
 }
 
+// Issue 40 item 18: a data glob that reaches a study's results folder
+// (`data = dd/*/*.csv` with --out dd/res) leaves its files out; before, the
+// second run read dd/res/runs.csv as data and failed.
+TEST_F(RecordedStudy, DataGlobsLeaveResultsFoldersOut) {
+  TempDir dir;
+  const std::string data = std::string(ESTLAB_SOURCE_DIR) + "/examples/data/multiarm/single/";
+  std::filesystem::create_directories(dir.File("dd/a"));
+  std::filesystem::create_directories(dir.File("dd/res/timeseries/single"));
+  std::filesystem::copy_file(data + "validate_1.csv", dir.File("dd/a/x.csv"));
+  std::ofstream(dir.File("dd/res/study.state")) << "status = complete\n";
+  std::ofstream(dir.File("dd/res/runs.csv")) << "scenario,run\nsingle,0\n";
+  std::ofstream(dir.File("dd/res/timeseries/single/run_0.csv")) << "t,x\n0,1\n";
+  const std::string text =
+      Replace(ConfigText(), "../../../examples/data/multiarm/single/validate_1.csv",
+              dir.File("dd/*/*.csv"));
+  const StudyConfig c = ParseStudyConfig(text, kConfig);
+  ASSERT_EQ(c.scenarios[0].data_runs.size(), 1u);
+  EXPECT_EQ(c.scenarios[0].data_runs[0].path, dir.File("dd/a/x.csv"));
+  const std::string only = Replace(text, "dd/*/*.csv", "dd/res/*.csv");
+  EXPECT_NE(ParseError(only).find("matches only files of a study's results folder"),
+            std::string::npos)
+      << ParseError(only);
+}
+
 TEST_F(RecordedStudy, DataFilesAreTheRuns) {
   const std::string text = Replace(ConfigText(), "validate_1.csv", "validate_*.csv");
   const StudyConfig c = ParseStudyConfig(text, kConfig);

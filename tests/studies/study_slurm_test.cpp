@@ -169,7 +169,7 @@ TEST_F(StudySlurm, OddPathsAreQuotedAndTheScriptsRun) {
             "for a in \"$@\"; do echo \"[$a]\"; done >> \"$(dirname \"$0\")/sbatch.log\"\n"
             "echo $((n + 1)) > \"$(dirname \"$0\")/next\"\n"
             "echo \"$n\"\n");
-  const std::string odd = "we ird 'q' \"dq\" $HOME `id` \xc3\xa9";
+  const std::string odd = "we ird 'q' \"dq\" $HOME $ARRAY `id` \xc3\xa9";
   fs::create_directories(dir_.File(odd));
   const auto r = Estlab("study s.ini --out " + Quoted(odd + "/res") + " --slurm 3");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -178,6 +178,8 @@ TEST_F(StudySlurm, OddPathsAreQuotedAndTheScriptsRun) {
   EXPECT_NE(log.find("[" + slurm + "/array.sh]\n"), std::string::npos) << log;
   EXPECT_NE(log.find("[--output=" + slurm + "/logs/shard-%a.out]\n"), std::string::npos) << log;
   EXPECT_NE(log.find("[" + slurm + "/merge.sh]\n"), std::string::npos) << log;
+  EXPECT_NE(log.find("[--output=" + slurm + "/logs/merge.out]\n"), std::string::npos) << log;
+  EXPECT_NE(log.find("[--dependency=afterok:100]\n"), std::string::npos) << log;
   // What Slurm would run: each task, then the merge.
   for (int k = 1; k <= 3; ++k) {
     const std::string cmd = "cd / && SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " +
