@@ -41,17 +41,20 @@ job_ids() { sed -n 's/.*"array_job": "\([0-9]*\)".*"merge_job": "\([0-9]*\)".*/\
 start=$(date +%s)
 "$estlab" study study.ini --out local --jobs 2 --quiet >/dev/null
 
-# 1. Through Slurm: 3 array tasks and the merge.
-read -r array merge < <("$estlab" study study.ini --out viaslurm --slurm 3 --jobs 1 --json | job_ids)
+# 1. Through Slurm: 3 array tasks and the merge, into a folder whose name
+#    holds a space, quotes, '$', a backquote and a non-ASCII letter (issue 40:
+#    the scripts quote every path; sbatch gets each as one word).
+odd="via slurm 'q' \"dq\" \$HOME \`id\` é"
+read -r array merge < <("$estlab" study study.ini --out "$odd" --slurm 3 --jobs 1 --json | job_ids)
 [ -n "$merge" ] || fail "no job ids from --slurm"
 echo "test-slurm: array job $array, merge job $merge"
 wait_jobs "$array,$merge" 300
-[ -f viaslurm/summary.csv ] || { cat viaslurm.slurm/logs/* >&2 || true; fail "the merge job wrote no viaslurm/summary.csv"; }
-same local viaslurm
-"$estlab" study --status viaslurm | tee status.txt
-grep -q "viaslurm: complete" status.txt || fail "--status does not say complete"
+[ -f "$odd/summary.csv" ] || { cat "$odd.slurm"/logs/* >&2 || true; fail "the merge job wrote no $odd/summary.csv"; }
+same local "$odd"
+"$estlab" study --status "$odd" | tee status.txt
+grep -qF "$odd: complete" status.txt || fail "--status does not say complete"
 grep -q "3 of 3 shards complete" status.txt || fail "--status does not count 3 complete shards"
-echo "test-slurm: merged result byte-identical to the local run"
+echo "test-slurm: merged result byte-identical to the local run (out: $odd)"
 
 # 2. Shard 2 cancelled (it waits for a hold, so it never finishes), the merge
 #    with it; resubmission runs shard 2 only.
