@@ -30,7 +30,8 @@ TEST(ModelSource, ModelFileWritesTheGeneratedHeaderEntryAndTuner) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "model pendulum-file: wrote gen/model.h, entry.cpp, tune.cpp\n");
   const modelfile::ModelFile m = modelfile::ParseModelFile(ReadFile(file), file);
-  EXPECT_EQ(ReadFile(dir.File("gen/model.h")), modelfile::GenerateModelHeader(m, "PendulumFileModel"));
+  EXPECT_EQ(ReadFile(dir.File("gen/model.h")),
+            modelfile::GenerateModelHeader(m, "PendulumFileModel"));
   const std::string entry = ReadFile(dir.File("gen/entry.cpp"));
   EXPECT_NE(entry.find("#include \"model.h\"\n"), std::string::npos) << entry;
   EXPECT_NE(entry.find("#define ESTLAB_MODEL_TYPE estlab::user_models::PendulumFileModel\n"),

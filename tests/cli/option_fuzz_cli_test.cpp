@@ -82,6 +82,21 @@ void ExpectHonestEnd(const RunResult& r, const std::string& args, Tally* tally) 
   }
 }
 
+// 40 seeded draws of `dims` after `base`, each ending honestly; at least 4
+// must end with exit 0, so that the draws reach real work, not only
+// refusals. Prints what they reached.
+void RunDraws(const TempDir& dir, const std::string& base, const std::vector<Dimension>& dims,
+              unsigned seed, const char* what) {
+  std::mt19937 rng(seed);
+  Tally tally;
+  for (int i = 0; i < 40; ++i) {
+    const std::string args = base + Draw(rng, dims);
+    ExpectHonestEnd(RunBoxed(args, dir, 120), " " + args, &tally);
+  }
+  tally.Print(what);
+  EXPECT_GE(tally.by_exit[0], 4);
+}
+
 const char* const kSimulate =
     "simulate --model pendulum --param g=9.8 --x0 theta=0.785398 --t-end 1 --dt 0.0125 "
     "--integrator euler --measure sin --meas-noise-var 0.1 --seed 3 --out d.csv";
@@ -110,18 +125,10 @@ TEST(OptionFuzzCli, TunerOptionSetsEndHonestly) {
       {{""}, {"--horizon 0", "--horizon 1e9", "--horizon 0.1"}},
       {{""}, {"--solver least-squares", "--param-bounds L=0.1:10", "--param-bounds L=5:1"}},
   };
-  std::mt19937 rng(40);
-  Tally tally;
-  for (int i = 0; i < 40; ++i) {
-    const std::string args =
-        "tune --model pendulum --param g=9.8,L=1 --measure sin --x0 "
-        "theta=0.785398 --p0-diag 0.1,0.1 --integrator euler --data d.csv "
-        "--out t.ini" +
-        Draw(rng, dims);
-    ExpectHonestEnd(RunBoxed(args, dir, 120), " " + args, &tally);
-  }
-  tally.Print("tune");
-  EXPECT_GE(tally.by_exit[0], 4);  // the draws reach real fits, not only refusals
+  RunDraws(dir,
+           "tune --model pendulum --param g=9.8,L=1 --measure sin --x0 theta=0.785398 "
+           "--p0-diag 0.1,0.1 --integrator euler --data d.csv --out t.ini",
+           dims, 40, "tune");
 }
 
 TEST(OptionFuzzCli, SmootherOptionSetsEndHonestly) {
@@ -143,17 +150,10 @@ TEST(OptionFuzzCli, SmootherOptionSetsEndHonestly) {
       {{"", "--full-cov", "--truth theta,omega", "--json"}, {"--lag-one"}},
       {{"", "--integrator rk4", "--integrator cvodes"}, {"--integrator nope"}},
   };
-  std::mt19937 rng(41);
-  Tally tally;
-  for (int i = 0; i < 40; ++i) {
-    const std::string args =
-        "smooth --model pendulum --param g=9.8 --measure sin --x0 "
-        "theta=0.785398 --data d.csv --out s.csv" +
-        Draw(rng, dims);
-    ExpectHonestEnd(RunBoxed(args, dir, 120), " " + args, &tally);
-  }
-  tally.Print("smooth");
-  EXPECT_GE(tally.by_exit[0], 4);  // the draws reach real runs, not only refusals
+  RunDraws(dir,
+           "smooth --model pendulum --param g=9.8 --measure sin --x0 theta=0.785398 "
+           "--data d.csv --out s.csv",
+           dims, 41, "smooth");
 }
 
 }  // namespace
