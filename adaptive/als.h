@@ -89,7 +89,7 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
   const typename Model::Params params = ParamsFromVector<Model>(spec.params);
   auto transition = MakeTransition<Model>(params, spec.transition);
   auto filter = MakeFilter<Model, Meas>(spec, params, transition.get());
-  filter->SetInput(spec.input);
+  filter->SetInput(InputFrom<Model>(InputAtRow(spec, d, 0)));
   const Mat<M, M> R = MatFromVector<M, M>(spec.r);
   filter->Initialize(PriorMean<Model, Meas>(spec, d), MatFromVector<N, N>(spec.p0));
   std::vector<AlsStep<N, M>> steps;
@@ -99,9 +99,9 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
   };
   ForEachStep<M>(
       spec, d,
-      [&](size_t k, double t0, double t1, double u) {
+      [&](size_t k, double t0, double t1, const double* u) {
         const StateCov p_plus = filter->cov();
-        filter->SetInput(u);
+        filter->SetInput(InputFrom<Model>(u));
         const StateCov Q =
             spec.q_white_accel ? WhiteAccelQ<Model>(spec.qc, t1 - t0) : MatFromVector<N, N>(spec.q);
         if (filter->Predict(t0, t1, Q) != FilterStatus::kOk) fail(k, filter->last_error());
@@ -116,7 +116,8 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
         steps.back().predicted = true;
         return true;
       },
-      [&](size_t k, const Vec<double, M>* z) {
+      [&](size_t k, const Vec<double, M>* z, const double* u) {
+        filter->SetInput(InputFrom<Model>(u));  // u_k, seen by h(x, u)
         if (z == nullptr)
           throw InputError("ALS needs a measurement at every row: row " + std::to_string(k) +
                            " (line " + std::to_string(k < d.lines.size() ? d.lines[k] : 0) +

@@ -101,8 +101,8 @@ bool CubaturePoints(const SigmaPointSet& set, const Vec<double, D>& mean, const 
 template <class Model, class Meas>
 bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& joint,
                    const SmoothedMoments<Model::kStateDim>& a,
-                   const SmoothedMoments<Model::kStateDim>& b, double t0, double t1, double u,
-                   EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                   const SmoothedMoments<Model::kStateDim>& b, double t0, double t1,
+                   const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   Vec<double, 2 * N> mean;
   mean << a.x, b.x;
@@ -138,17 +138,17 @@ bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPoin
   return true;
 }
 
-// Adds B_k of a measured row.
+// Adds B_k of a measured row (input u at its time).
 template <class Model, class Meas>
 bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& state,
                     const SmoothedMoments<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
-                    EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                    const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   PointsT<double, N> points(N, state.unit_points.cols());
   if (!row.P.allFinite() || !CubaturePoints<N>(state, row.x, row.P, &points)) return false;
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
-    const Vec<double, M> e = lik.MeasurementResidual(z, points.col(i));
+    const Vec<double, M> e = lik.MeasurementResidual(z, points.col(i), u);
     sums->b.noalias() += state.mean_weights(i) * e * e.transpose();
   }
   ++sums->measurements;
@@ -185,15 +185,17 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
     const std::string where = d.path.empty() ? "" : " of " + d.path;
     const bool complete = ForEachStep<Meas::kDim>(
         spec, d,
-        [&](size_t k, double t0, double t1, double u) {
+        [&](size_t k, double t0, double t1, const double* u) {
           if (k == 0) return true;  // from the prior: not re-estimated
-          if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, u, sums)) return true;
+          if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, InputFrom<Model>(u), sums))
+            return true;
           *why = "the smoothed joint covariance of rows " + std::to_string(k - 1) + " and " +
                  std::to_string(k) + where + " is not positive semidefinite";
           return false;
         },
-        [&](size_t k, const Vec<double, Meas::kDim>* z) {
-          if (z == nullptr || AddMeasurement(lik, state, rows[k], *z, sums)) return true;
+        [&](size_t k, const Vec<double, Meas::kDim>* z, const double* u) {
+          if (z == nullptr || AddMeasurement(lik, state, rows[k], *z, InputFrom<Model>(u), sums))
+            return true;
           *why = "the smoothed covariance of row " + std::to_string(k) + where +
                  " is not positive semidefinite";
           return false;

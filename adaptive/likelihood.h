@@ -101,6 +101,7 @@ class InnovationLikelihood {
  public:
   static constexpr int kN = Model::kStateDim;
   static constexpr int kM = Meas::kDim;
+  static constexpr int kU = kInputCols<Model>;
   using Params = typename Model::Params;
   template <class T>
   using StateT = Eigen::Matrix<T, kN, 1>;
@@ -148,9 +149,10 @@ class InnovationLikelihood {
   // points: the noise-free process map x -> x- (the KF's linearised,
   // discretised map; else Phi, fixed-step or CVODES) and the measurement
   // residual wrap(z - h(x)) (the KF's linearised h).
-  Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1, double u) const {
+  Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1,
+                                  const InputOf<Model>& u) const {
     if (!kf_) return Propagate<double>(x, t0, t1, u, params_, nullptr);
-    const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
+    const KfDiscretization<kN, kU>* step = FindKfStep(t1 - t0);
     if (step == nullptr)  // SetUpKf saw every step of the data
       throw NumericalError("no KF discretisation for the step " + FormatNumber(t1 - t0));
     Vec<double, kN> next = x;
@@ -159,13 +161,15 @@ class InnovationLikelihood {
     KfPredict<Model, kM>(kf_lin_, *step, u, no_noise, &next, &P);
     return next;
   }
-  Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x) const {
+  Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x,
+                                      const InputOf<Model>& u) const {
     Vec<double, kM> z_pred;
-    if (kf_) {  // h(x*) + H wrap(x - x*), as KfUpdate
-      z_pred =
-          kf_lin_.h_star + kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates);
+    if (kf_) {  // h(x*, u*) + H wrap(x - x*) + D (u - u*), as KfUpdate
+      z_pred = kf_lin_.h_star +
+               kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates) +
+               kf_lin_.D * (InputColumn<Model>(u) - kf_lin_.u_star);
     } else {
-      z_pred = Meas::template Eval<double>(x, params_);
+      z_pred = EvalMeasurement<Model, Meas, double>(x, u, params_);
     }
     return WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
   }
@@ -234,7 +238,7 @@ class InnovationLikelihood {
 
  private:
   // KF: one discretisation per distinct step length of the data.
-  const KfDiscretization<kN>* FindKfStep(double dt) const {
+  const KfDiscretization<kN, kU>* FindKfStep(double dt) const {
     for (const auto& [step_dt, step] : kf_steps_)
       if (step_dt == dt) return &step;
     return nullptr;
@@ -257,17 +261,18 @@ class InnovationLikelihood {
     bool have_propagated = false;
   };
   template <class T, class P>
-  bool Predict(Belief<T>* b, double t0, double t1, double u, const StateCovT<T>& Q, const P& p,
-               std::string* why) const;
+  bool Predict(Belief<T>* b, double t0, double t1, const InputOf<Model>& u,
+               const StateCovT<T>& Q, const P& p, std::string* why) const;
   template <class T, class P>
-  bool Update(Belief<T>* b, const Vec<double, kM>& z, const MeasCovT<T>& R, const P& p,
-              MeasT<T>* whitened, T* log_det, std::string* why) const;
+  bool Update(Belief<T>* b, const Vec<double, kM>& z, const InputOf<Model>& u,
+              const MeasCovT<T>& R, const P& p, MeasT<T>* whitened, T* log_det,
+              std::string* why) const;
   // x- = Phi(x) (and F = dPhi/dx when F is not null) for scalar T: the
   // CVODES transition for double, AD through the fixed-step integrator
   // otherwise (a nested Jet for F when T is a Jet).
   template <class T, class P>
-  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, double u, const P& p,
-                      StateCovT<T>* F) const;
+  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, const InputOf<Model>& u,
+                      const P& p, StateCovT<T>* F) const;
   // The CVODES flow differentiated in C directions, made on first use (one
   // per Jet size the tuner runs).
   template <int C>
@@ -292,8 +297,8 @@ class InnovationLikelihood {
   SigmaPointSet sigma_set_;
   // KF: the linearisation, and Phi, Gamma, d per step length of the data.
   bool kf_ = false;
-  KfLinearization<kN, kM> kf_lin_;
-  std::vector<std::pair<double, KfDiscretization<kN>>> kf_steps_;
+  KfLinearization<kN, kM, kU> kf_lin_;
+  std::vector<std::pair<double, KfDiscretization<kN, kU>>> kf_steps_;
   // CVODES process model (null for the fixed-step ones), made anew for every
   // dataset of every Run(): CVODES carries step-size history from call to
   // call, and the NLL must be a function of theta alone for the central
@@ -456,13 +461,13 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
     b.P = p0_.template cast<T>();
     b.have_propagated = false;
     long update_index = 0;
-    auto predict = [&](size_t k, double t0, double t1, double u) {
+    auto predict = [&](size_t k, double t0, double t1, const double* u) {
       if (q_.DependsOnDt() && t1 - t0 != q_dt) {
         q_dt = t1 - t0;
         Q = q_.template Matrix<T>(theta_q, q_dt);
       }
       try {
-        if (!Predict<T>(&b, t0, t1, u, Q, p, &reason))
+        if (!Predict<T>(&b, t0, t1, InputFrom<Model>(u), Q, p, &reason))
           return fail(d, k, "prediction failed: " + reason);
       } catch (const NumericalError& e) {  // CVODES failed
         if (why != nullptr) *why = e.what() + OneIntervalBoundNote(e.what());
@@ -471,11 +476,11 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
       if (const std::string work = WorkBoundMessage(); !work.empty()) return fail(d, k, work);
       return true;
     };
-    auto row = [&](size_t k, const Vec<double, kM>* z) {
+    auto row = [&](size_t k, const Vec<double, kM>* z, const double* u) {
       if (z != nullptr) {
         MeasT<T> e;
         T log_det;
-        if (!Update<T>(&b, *z, R, p, &e, &log_det, &reason))
+        if (!Update<T>(&b, *z, InputFrom<Model>(u), R, p, &e, &log_det, &reason))
           return fail(d, k, "update failed: " + reason);
         if (update_index >= options_.burn_in) sink(e, log_det);
         ++update_index;
@@ -492,8 +497,9 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
 template <class Model, class Meas>
 template <class T, class P>
 typename InnovationLikelihood<Model, Meas>::template StateT<T>
-InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, double t1, double u,
-                                             const P& p, StateCovT<T>* F) const {
+InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, double t1,
+                                             const InputOf<Model>& u, const P& p,
+                                             StateCovT<T>* F) const {
   if constexpr (std::is_same_v<T, double>) {
     if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
       cvodes_->SetInput(u);
@@ -545,11 +551,11 @@ CvodesThetaFlow<Model, C>& InnovationLikelihood<Model, Meas>::ThetaFlow() const 
 
 template <class Model, class Meas>
 template <class T, class P>
-bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double t1, double u,
-                                                const StateCovT<T>& Q, const P& p,
-                                                std::string* why) const {
+bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double t1,
+                                                const InputOf<Model>& u, const StateCovT<T>& Q,
+                                                const P& p, std::string* why) const {
   if (kf_) {
-    const KfDiscretization<kN>* step = FindKfStep(t1 - t0);
+    const KfDiscretization<kN, kU>* step = FindKfStep(t1 - t0);
     if (step == nullptr) {  // cannot happen: SetUpKf saw every step
       *why = "no KF discretisation for this step";
       return false;
@@ -582,12 +588,13 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
 template <class Model, class Meas>
 template <class T, class P>
 bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z,
-                                               const MeasCovT<T>& R, const P& p, MeasT<T>* whitened,
-                                               T* log_det, std::string* why) const {
+                                               const InputOf<Model>& input, const MeasCovT<T>& R,
+                                               const P& p, MeasT<T>* whitened, T* log_det,
+                                               std::string* why) const {
   GaussianUpdate<T, kN, kM> u;
   FilterStatus status;
   if (kf_) {
-    status = KfUpdate<Model, Meas, T>(kf_lin_, b->x, b->P, z, R, &u, why);
+    status = KfUpdate<Model, Meas, T>(kf_lin_, input, b->x, b->P, z, R, &u, why);
   } else if (sigma_) {
     // Y_i: the propagated points, or new ones from (x-, P-) without jitter.
     const bool redraw = sigma_redraw_ || !b->have_propagated;
@@ -597,9 +604,10 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
       return false;
     }
     status = SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                         &b->measurement_points, b->x, b->P, z, R, p, &u, why);
+                                         &b->measurement_points, b->x, b->P, z, R, input, p, &u,
+                                         why);
   } else {
-    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, p, iterations_, &u, why);
+    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, input, p, iterations_, &u, why);
   }
   if (status != FilterStatus::kOk) return false;
   Whiten<kM, T>(u.L, u.nu, whitened, log_det);

@@ -15,6 +15,7 @@
 #include "adaptive/tuner.h"
 #include "src/core/types.h"
 #include "src/run/filter_spec.h"
+#include "src/run/step_loop.h"
 
 namespace estlab {
 
@@ -94,7 +95,8 @@ const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
     if (d.m != Meas::kDim || d.z.size() != d.t.size() * size_t(Meas::kDim))
       throw InputError(name + ": measurement columns do not match '" + std::string(Meas::kName) +
                        "'");
-    if (d.has_input && d.u.size() != d.t.size()) throw InputError(name + ": input column size");
+    if (const std::string why = CheckInputWidths(spec, d, kInputDim<Model>); !why.empty())
+      throw InputError(why);
     long updates = 0;
     std::vector<long> finite(Meas::kDim, 0);
     for (size_t k = 0; k < d.t.size(); ++k) {

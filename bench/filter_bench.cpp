@@ -51,7 +51,7 @@ struct ConstantVelocity2d {
   static constexpr const char* kName = "cv2d";
   static constexpr const char* kDescription = "constant velocity in 2-D";
   static constexpr int kStateDim = 4;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   static constexpr bool kPacketRhs = true;  // branch-free (src/core/packet.h)
   static constexpr std::array<const char*, 4> kStateNames = {"px", "vx", "py", "vy"};
@@ -83,6 +83,64 @@ struct ConstantVelocity2d {
   using Measurements = std::tuple<Positions>;
 };
 
+// A cart driven by a DC motor (examples/dc_cart/dc_cart.model), position and
+// motor current measured (the current sees the voltage: h(x, u)), with the
+// motor voltage only (Inputs = 1) or also a load force (Inputs = 2): the
+// same size, for the cost of a second input (issue 34, done-when 5).
+template <int Inputs>
+struct DcCartBench {
+  static constexpr const char* kName = "dc-cart-bench";
+  static constexpr const char* kDescription = "DC-motor cart";
+  static constexpr int kStateDim = 2;
+  static constexpr int kInputDim = Inputs;
+  static constexpr std::array<const char*, Inputs> kInputNames = [] {
+    if constexpr (Inputs == 1)
+      return std::array<const char*, 1>{"V"};
+    else
+      return std::array<const char*, 2>{"V", "F"};
+  }();
+  static constexpr std::array<const char*, Inputs> kInputUnits = [] {
+    if constexpr (Inputs == 1)
+      return std::array<const char*, 1>{"V"};
+    else
+      return std::array<const char*, 2>{"V", "N"};
+  }();
+  static constexpr bool kStiff = false;
+  static constexpr std::array<const char*, 2> kStateNames = {"x", "v"};
+  static constexpr std::array<const char*, 2> kStateUnits = {"m", "m/s"};
+  static constexpr std::array<bool, 2> kAngleStates = {false, false};
+  static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
+  using Input = InputOf<DcCartBench>;
+  struct Params {
+    double m = 2.0, b = 3.0, K = 0.05, R = 1.5, r = 0.02;
+  };
+  static constexpr std::array<ParamSpec<Params>, 1> kParams = {
+      {{"m", &Params::m, "mass [kg]", Constraint::kPositive}}};
+  static double Voltage(const Input& u) { return InputComponent<DcCartBench>(u, 0); }
+  static double Load(const Input& u) {
+    return Inputs > 1 ? InputComponent<DcCartBench>(u, Inputs - 1) : 0.0;
+  }
+  template <class T>
+  static Vec<T, 2> Rhs(const T&, const Vec<T, 2>& x, const Input& u, const Params& p) {
+    const T i = (Voltage(u) - p.K * x(1) / p.r) / p.R;
+    return Vec<T, 2>(x(1), (p.K * i / p.r - p.b * x(1) + Load(u)) / p.m);
+  }
+  static constexpr std::array<const char*, 0> kInvariantNames = {};
+  static bool InvariantsHold(const Params&, const Input&) { return false; }
+  static Vec<double, 0> Invariants(const Vec<double, 2>&, const Params&) { return {}; }
+  struct EncoderCurrent {
+    static constexpr const char* kName = "encoder-current";
+    static constexpr int kDim = 2;
+    static constexpr std::array<const char*, 2> kOutputs = {"x", "current"};
+    static constexpr std::array<bool, 2> kAngleOutputs = {false, false};
+    template <class T>
+    static Vec<T, 2> Eval(const Vec<T, 2>& x, const Input& u, const Params& p) {
+      return Vec<T, 2>(x(0), (Voltage(u) - p.K * x(1) / p.r) / p.R);
+    }
+  };
+  using Measurements = std::tuple<EncoderCurrent>;
+};
+
 template <class Model>
 Vec<double, Model::kStateDim> StartState() {
   Vec<double, Model::kStateDim> x = Vec<double, Model::kStateDim>::Zero();
@@ -107,7 +165,7 @@ void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make)
   const Mat<N, N> P0 = 0.01 * Mat<N, N>::Identity();
   const Mat<N, N> Q = 1e-4 * Mat<N, N>::Identity();
   const Mat<M, M> R = 1e-2 * Mat<M, M>::Identity();
-  const Vec<double, M> z = Meas::template Eval<double>(x0, params);
+  const Vec<double, M> z = EvalMeasurement<Model, Meas, double>(x0, transition->input(), params);
   filter->Initialize(x0, P0);
   const double dt = 0.01;
   double t = 0.0;
@@ -128,6 +186,15 @@ void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make)
 template <class Model, class Meas>
 void Ekf_(benchmark::State& s, Integrator integrator) {
   FilterStep<Model, Meas>(s, integrator, [](Transition<Model>* tr, const auto& p) {
+    return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
+  });
+}
+// The EKF with a constant nonzero input (1 V, and 0.5 N for a second input).
+template <class Model, class Meas>
+void EkfInput_(benchmark::State& s) {
+  FilterStep<Model, Meas>(s, Integrator::kRk4, [](Transition<Model>* tr, const auto& p) {
+    const double u[2] = {1.0, 0.5};
+    tr->SetInput(InputFrom<Model>(u));
     return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
   });
 }
@@ -348,6 +415,12 @@ void RegisterAll() {
       ->Unit(us);
   RegisterBenchmark("Floor/pendulum/rk4-with-jacobian/x1", Transitions_<Pendulum>, 1, true, rk4);
   RegisterBenchmark("Floor/pendulum/rk4/x5", Transitions_<Pendulum>, 5, false, rk4);
+  // One input against two on a model of the same size (the EKF step; the
+  // current sensor sees the voltage).
+  using Dc1 = DcCartBench<1>;
+  using Dc2 = DcCartBench<2>;
+  RegisterBenchmark("EKF/dc-cart/n2m2/one-input/rk4", EkfInput_<Dc1, Dc1::EncoderCurrent>);
+  RegisterBenchmark("EKF/dc-cart/n2m2/two-inputs/rk4", EkfInput_<Dc2, Dc2::EncoderCurrent>);
   // Double pendulum, both angles measured.
   using DP = DoublePendulum;
   RegisterBenchmark("KF/double-pendulum/n4m2/rk4", Kf_<DP, DP::Angles>);

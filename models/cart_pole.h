@@ -25,7 +25,7 @@ struct CartPole {
   static constexpr const char* kDescription =
       "inverted pendulum on a cart (paper 004), theta from the downward vertical, input F";
   static constexpr int kStateDim = 4;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   // Rhs and every Eval are branch-free in T: points are moved in packets
   // (src/core/packet.h).

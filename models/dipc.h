@@ -32,7 +32,7 @@ struct Dipc {
   static constexpr const char* kDescription =
       "double inverted pendulum on a cart (paper 001), uniform rods, angles from upright, input u";
   static constexpr int kStateDim = 6;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   // Rhs and every Eval are branch-free in T: points are moved in packets
   // (src/core/packet.h).

@@ -28,7 +28,7 @@ struct DoublePendulum {
       "double pendulum of point masses (myphysicslab), both angles absolute from the downward "
       "vertical";
   static constexpr int kStateDim = 4;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   // Rhs and every Eval are branch-free in T: points are moved in packets
   // (src/core/packet.h).

@@ -6,13 +6,18 @@
 // A model (see models/pendulum.h for a complete one):
 //   kName, kDescription              const char*
 //   kStateDim                        int, the state dimension n
-//   kHasInput, kStiff                bool (one scalar input u; BDF by default)
+//   kInputDim                        int, the number of inputs nu (0, 1, ...)
+//   kInputNames, kInputUnits         nu names and units (optional for nu <= 1:
+//                                    "u" and ""); the data columns matched
+//   kStiff                           bool (BDF by default)
 //   kStateNames, kStateUnits         n names, n units ("" = dimensionless)
 //   kAngleStates                     n flags: wrapped in innovations and errors
 //   kPositionRatePairs               (position, rate) index pairs (white-accel Q)
 //   Params, kParams                  parameter struct and its table (name,
 //                                    member, description with unit, constraint)
-//   Rhs<T>(t, x, u, params)          dx/dt for any scalar T (double, Jet)
+//   Rhs<T>(t, x, u, params)          dx/dt for any scalar T (double, Jet);
+//                                    u is InputOf<M>: a double for nu <= 1
+//                                    (0 without input), Vec<double, nu> else
 //     or, for a discrete-time model (kDiscreteTime = true):
 //   Step<T>(t, x, dt, u, params)     x(t + dt) for any scalar T; such a model
 //                                    runs with Integrator::kDiscrete only
@@ -25,11 +30,14 @@
 //   Measurements                     std::tuple of measurement structs
 // A measurement:
 //   kName, kDim (m), kOutputs (m names), kAngleOutputs (m flags)
-//   Eval<T>(x, params)               h(x) for any scalar T
+//   Eval<T>(x, params)               h(x) for any scalar T, or
+//   Eval<T>(x, u, params)            h(x, u): a measurement that sees the
+//                                    input (u as in Rhs; EvalMeasurement)
 #ifndef ESTLAB_MODELS_MODEL_H_
 #define ESTLAB_MODELS_MODEL_H_
 
 #include <concepts>
+#include <type_traits>
 #include <cstddef>
 #include <tuple>
 #include <utility>
@@ -37,6 +45,63 @@
 #include "src/core/types.h"
 
 namespace estlab {
+
+// The number of inputs of M (M::kInputDim).
+template <class M>
+inline constexpr int kInputDim = int(M::kInputDim);
+
+// The number of columns of an input Jacobian (df/du, dh/du): one per
+// input, and one (zero) column for a model without input.
+template <class M>
+inline constexpr int kInputCols = kInputDim<M> > 1 ? kInputDim<M> : 1;
+
+// The input as M's functions take it: a double for models with at most one
+// input (0.0 without input), Vec<double, nu> for more.
+template <class M>
+using InputOf = std::conditional_t<(kInputDim<M> > 1), Vec<double, kInputCols<M>>, double>;
+
+// The input of M from nu doubles (the zero input when u is null).
+template <class M>
+InputOf<M> InputFrom(const double* u) {
+  if constexpr (kInputDim<M> > 1) {
+    if (u == nullptr) return InputOf<M>::Zero();
+    return Eigen::Map<const InputOf<M>>(u);
+  } else {
+    return (u != nullptr && kInputDim<M> == 1) ? u[0] : 0.0;
+  }
+}
+// Component i of an input (0 <= i < max(1, nu)).
+template <class M>
+double InputComponent(const InputOf<M>& u, int i) {
+  if constexpr (kInputDim<M> > 1)
+    return u(i);
+  else
+    return (void)i, u;
+}
+template <class M>
+void SetInputComponent(InputOf<M>* u, int i, double value) {
+  if constexpr (kInputDim<M> > 1)
+    (*u)(i) = value;
+  else
+    (void)i, *u = value;
+}
+
+// The name and unit of M's input i: kInputNames/kInputUnits when M has them,
+// else "u" and "" (a model with one input may leave them out).
+template <class M>
+const char* InputName(int i) {
+  if constexpr (requires { M::kInputNames; })
+    return M::kInputNames[std::size_t(i)];
+  else
+    return (void)i, "u";
+}
+template <class M>
+const char* InputUnit(int i) {
+  if constexpr (requires { M::kInputUnits; })
+    return M::kInputUnits[std::size_t(i)];
+  else
+    return (void)i, "";
+}
 
 // True for a model that states its dynamics as a step map x(t + dt) =
 // Step(t, x, dt, u, p) (`static constexpr bool kDiscreteTime = true;`);
@@ -68,23 +133,28 @@ inline constexpr bool kPacketModel = IsPacketModel<M>();
 // discrete-time model.
 template <class M>
 concept ContinuousDynamics =
-    !kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
-  { M::template Rhs<double>(0.0, x, 0.0, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
+    !kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
+                                  const typename M::Params& p) {
+  { M::template Rhs<double>(0.0, x, u, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 template <class M>
 concept DiscreteDynamics = kDiscreteTime<M> &&
-    requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+    requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u, const typename M::Params& p) {
   {
-    M::template Step<double>(0.0, x, 0.1, 0.0, p)
+    M::template Step<double>(0.0, x, 0.1, u, p)
     } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 
 template <class M>
-concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
+concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
+                                const typename M::Params& p) {
   { M::kName } -> std::convertible_to<const char*>;
   { M::kDescription } -> std::convertible_to<const char*>;
   { M::kStateDim } -> std::convertible_to<int>;
-  { M::kHasInput } -> std::convertible_to<bool>;
+  { M::kInputDim } -> std::convertible_to<int>;
+  requires M::kInputDim >= 0;
+  requires M::kInputDim <= 1 || (M::kInputNames.size() == std::size_t(M::kInputDim) &&
+                                 M::kInputUnits.size() == std::size_t(M::kInputDim));
   { M::kStiff } -> std::convertible_to<bool>;
   requires M::kStateNames.size() == std::size_t(M::kStateDim);
   requires M::kStateUnits.size() == std::size_t(M::kStateDim);
@@ -94,8 +164,15 @@ concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const typena
   requires ContinuousDynamics<M> || DiscreteDynamics<M>;
   { M::kInvariantNames.size() } -> std::convertible_to<std::size_t>;
   M::Invariants(x, p);
-  { M::InvariantsHold(p, 0.0) } -> std::convertible_to<bool>;
+  { M::InvariantsHold(p, u) } -> std::convertible_to<bool>;
   std::tuple_size<typename M::Measurements>::value;
+};
+
+// True for a measurement h(x, u, p) of M: Eval takes the input.
+template <class Meas, class M>
+concept MeasurementSeesInput =
+    requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u, const typename M::Params& p) {
+  { Meas::template Eval<double>(x, u, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
 };
 
 template <class Meas, class M>
@@ -105,8 +182,21 @@ concept MeasurementOf = DynamicModel<M> &&
   { Meas::kDim } -> std::convertible_to<int>;
   requires Meas::kOutputs.size() == std::size_t(Meas::kDim);
   requires Meas::kAngleOutputs.size() == std::size_t(Meas::kDim);
-  { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
+  requires MeasurementSeesInput<Meas, M> || requires {
+    { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
+  };
 };
+
+// h(x, u, p) for every measurement: the input is passed to those that see it
+// and dropped for the others. T: the state's scalar; P: Params or ParamsT<S>.
+template <class Model, class Meas, class T, class P>
+Vec<T, Meas::kDim> EvalMeasurement(const Vec<T, Model::kStateDim>& x, const InputOf<Model>& u,
+                                   const P& p) {
+  if constexpr (MeasurementSeesInput<Meas, Model>)
+    return Meas::template Eval<T>(x, u, p);
+  else
+    return (void)u, Meas::template Eval<T>(x, p);
+}
 
 // Every measurement in M::Measurements satisfies MeasurementOf<., M>.
 template <class M, class Tuple = typename M::Measurements>

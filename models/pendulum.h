@@ -22,7 +22,7 @@ struct Pendulum {
   static constexpr const char* kName = "pendulum";
   static constexpr const char* kDescription = "simple pendulum, theta from the downward vertical";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   // Rhs and every Eval are branch-free in T: points are moved in packets
   // (src/core/packet.h).

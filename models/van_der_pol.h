@@ -22,7 +22,7 @@ struct VanDerPol {
   static constexpr const char* kName = "van-der-pol";
   static constexpr const char* kDescription = "stiff Van der Pol oscillator";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = true;
   // Rhs and every Eval are branch-free in T: points are moved in packets
   // (src/core/packet.h).

@@ -48,7 +48,9 @@ SimulationResult SimulateRows(const ModelEntry& model, const FilterSpec& spec, c
   s.params = spec.params;
   s.x0 = x0;
   s.times.assign(d.t.begin() + long(first), d.t.begin() + long(first + count));
-  if (d.has_input) s.inputs.assign(d.u.begin() + long(first), d.u.begin() + long(first + count));
+  const long nu = d.nu;
+  if (nu > 0)
+    s.inputs.assign(d.u.begin() + long(first) * nu, d.u.begin() + long(first + count) * nu);
   s.input = spec.input;
   s.transition = spec.transition;
   s.measurement = spec.measurement;
@@ -167,15 +169,36 @@ struct ThetaMap {
   }
 };
 
+// The weight of each output's errors: w_j = sqrt(R_11 / R_jj) from the
+// spec's R (the noise variances the user gives), so that outputs in other
+// units or with other noise count as their noise says and the residual sd is
+// in the first output's units; 1 for every output when R has no positive
+// diagonal. A single output is never reweighted.
+std::vector<double> OutputWeights(const FilterSpec& spec, int m) {
+  std::vector<double> w(size_t(m), 1.0);
+  if (spec.r.size() != size_t(m) * size_t(m)) return w;
+  for (int j = 0; j < m; ++j)
+    if (!(spec.r[size_t(j) * m + j] > 0) || !std::isfinite(spec.r[size_t(j) * m + j])) return w;
+  for (int j = 1; j < m; ++j) w[j] = std::sqrt(spec.r[0] / spec.r[size_t(j) * m + j]);
+  return w;
+}
+
 class SimulationErrors {
  public:
   SimulationErrors(const ModelEntry& model, const FilterSpec& spec, const ThetaMap& map,
-                   const std::vector<FilterData>& runs, double horizon)
-      : model_(model), spec_(spec), map_(map), runs_(runs), horizon_(horizon) {}
+                   const std::vector<FilterData>& runs, double horizon, std::vector<double> weights)
+      : model_(model),
+        spec_(spec),
+        map_(map),
+        runs_(runs),
+        horizon_(horizon),
+        weights_(std::move(weights)) {}
+  // The weighted errors w_j e (OutputWeights).
   bool operator()(double const* const* parameters, double* residuals) const {
     Errors e;
     if (!At(parameters[0], &e)) return false;
-    std::copy(e.e.begin(), e.e.end(), residuals);
+    const size_t m = weights_.size();
+    for (size_t i = 0; i < e.e.size(); ++i) residuals[i] = weights_[i % m] * e.e[i];
     return true;
   }
   bool At(const double* theta, Errors* e, long* windows = nullptr) const {
@@ -195,6 +218,7 @@ class SimulationErrors {
   const ThetaMap& map_;
   const std::vector<FilterData>& runs_;
   double horizon_;
+  std::vector<double> weights_;
   mutable std::string why_;
 };
 
@@ -387,7 +411,9 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   MapStarts(model, spec, runs, options, &map, &r, &lower, &upper);
   const int p = int(r.theta_initial.size());
   const int m = int(model.FindMeasurement(spec.measurement).outputs.size());
-  const SimulationErrors errors(model, spec, map, runs, options.horizon);
+  const std::vector<double> weights = OutputWeights(spec, m);
+  r.output_weights = weights;
+  const SimulationErrors errors(model, spec, map, runs, options.horizon, weights);
   Errors e0;
   if (!errors.At(r.theta_initial.data(), &e0, &r.windows))
     throw InputError("output-error at the initial parameters: " + errors.why());
@@ -396,12 +422,14 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
     throw InputError(
         "output-error: the data have no finite measurement to fit (every z cell "
         "is empty or NaN)");
-  for (double v : e0.e) r.cost_initial += 0.5 * v * v;
+  for (size_t i = 0; i < e0.e.size(); ++i)
+    r.cost_initial += 0.5 * (weights[i % m] * e0.e[i]) * (weights[i % m] * e0.e[i]);
 
   ceres::NumericDiffOptions step;
   step.relative_step_size = options.theta_step;
   auto* cost = new ceres::DynamicNumericDiffCostFunction<SimulationErrors, ceres::CENTRAL>(
-      new SimulationErrors(model, spec, map, runs, options.horizon), ceres::TAKE_OWNERSHIP, step);
+      new SimulationErrors(model, spec, map, runs, options.horizon, weights), ceres::TAKE_OWNERSHIP,
+      step);
   cost->AddParameterBlock(p);
   cost->SetNumResiduals(int(e0.e.size()));
   std::vector<double> theta = r.theta_initial;
@@ -431,8 +459,10 @@ OutputErrorResult FitOutputError(const ModelEntry& model, const FilterSpec& spec
   if (r.ok && !r.converged && summary.termination_type == ceres::CONVERGENCE)
     r.message = "the final squared error " + FormatNumber(2 * r.cost) + " exceeds the initial " +
                 FormatNumber(2 * r.cost_initial);
+  for (size_t i = 0; i < e.e.size(); ++i) e.e[i] /= weights[i % m];  // back in each output's units
   r.rmse = Rmse(e, m);
   r.residual_sd = std::sqrt(2.0 * r.cost / double(std::max<long>(1, r.residuals - p)));
+  for (int j = 0; j < m; ++j) r.residual_sds.push_back(r.residual_sd / weights[j]);
   StandardErrors(jac, map, lower, upper, &r);
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
   return r;

@@ -74,8 +74,14 @@ struct OutputErrorResult {
   std::vector<std::string> identifiability;
   long residuals = 0;  // N: the measured (finite) z cells
   long windows = 0;
-  double cost_initial = 0.0, cost = 0.0;  // 1/2 sum e^2
-  double residual_sd = 0.0;               // sigma
+  // Errors of output j are weighted by w_j = sqrt(R_11 / R_jj) from the
+  // spec's R (1 for a single output, or without a positive diagonal R), so
+  // that outputs count by their noise; the cost and sigma are of w e, in the
+  // first output's units.
+  std::vector<double> output_weights;
+  double cost_initial = 0.0, cost = 0.0;  // 1/2 sum (w e)^2
+  double residual_sd = 0.0;               // sigma = sqrt(sum (w e)^2 / (N - p))
+  std::vector<double> residual_sds;       // per output: sigma / w_j, its own units
   std::vector<double> rmse;               // per output, at the fit
   int iterations = 0;
   double wall_s = 0.0;

@@ -30,8 +30,8 @@ namespace {
 // parameterisation defaults to its guess's shape (the oracle's, when it
 // starts from the oracle: full when it has off-diagonal entries).
 TunerOptions StudyTunerOptions(const SectionValues& noise, const ScenarioConfig& sc, bool q_tuned,
-                               const std::string& q_shape, bool r_tuned,
-                               const std::string& r_shape, int n) {
+                               const std::string& q_shape, bool r_tuned, const std::string& r_shape,
+                               int n) {
   const ConfigErrors& err = noise.errors();
   if (noise.Has("tune-estimator"))  // studies offer ml, em and als
     Checked(*noise.Get("tune-estimator"), err, [](const std::string& t) {
@@ -62,8 +62,7 @@ TunerOptions StudyTunerOptions(const SectionValues& noise, const ScenarioConfig&
   for (const auto& [which, tuned] : {std::pair<std::string, bool>{"q", q_tuned}, {"r", r_tuned}}) {
     NoiseParam& p = which == "q" ? t.q_param : t.r_param;
     if (!tuned) p = NoiseParam::kFixed;
-    if (tuned && p == NoiseParam::kFixed)
-      noise.Fail(which + "-param", "fixed contradicts tuned");
+    if (tuned && p == NoiseParam::kFixed) noise.Fail(which + "-param", "fixed contradicts tuned");
   }
   return t;
 }
@@ -110,7 +109,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
     if (i + 1 < n) p0 += ";";
   }
   add("p0", p0, nullptr);
-  add("input", FormatDouble(sc.truth.input), scen.Get("input"));
+  std::string input;
+  for (double u : sc.truth.input) input += (input.empty() ? "" : ",") + FormatDouble(u);
+  add("input", input.empty() ? "0" : input, scen.Get("input"));
   // A smoother kind (urts, ...) runs its filter with spec.smooth set below.
   const Value* kind = filt.Get("kind");
   const std::string smoothed = FilterOfSmoother(kind->text);

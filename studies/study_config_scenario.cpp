@@ -40,16 +40,25 @@ namespace {
 void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigErrors& err,
                       bool recorded, ScenarioConfig* sc) {
   const ModelEntry& model = *sc->model;
+  if (model.inputs.size() > 1) {  // one constant per input
+    sc->truth.input =
+        Checked(value, err, [&](const std::string& t) { return ParseList(t, "input"); });
+    if (sc->truth.input.size() != model.inputs.size())
+      v.Fail("input", "model '" + model.name + "' has " + std::to_string(model.inputs.size()) +
+                          " inputs: give one constant each, comma-separated (signals drive "
+                          "single-input models)");
+    return;
+  }
   const std::string base = fs::path(err.path()).parent_path().string();  // file(...) paths
-  const InputSignal signal = Checked(
-      value, err, [&](const std::string& t) { return ParseInputSignal(t, "input", base); });
+  const InputSignal signal =
+      Checked(value, err, [&](const std::string& t) { return ParseInputSignal(t, "input", base); });
   if (signal.kind == InputSignal::kConstant) {
-    sc->truth.input = signal.mean;
-    if (signal.mean != 0 && !model.has_input)
+    if (model.has_input()) sc->truth.input = {signal.mean};
+    if (signal.mean != 0 && !model.has_input())
       v.Fail("input", "model '" + model.name + "' has no input");
     return;
   }
-  if (!model.has_input) v.Fail("input", "model '" + model.name + "' has no input");
+  if (!model.has_input()) v.Fail("input", "model '" + model.name + "' has no input");
   if (recorded)
     v.Fail("input", "a signal applies to simulated runs; recorded data carry their input column");
   SimulationSpec& truth = sc->truth;

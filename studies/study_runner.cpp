@@ -131,11 +131,13 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
   data.path = label;
   data.m = int(truth.columns.size()) - 1 - n;
   data.has_truth = true;
-  data.has_input = !sc.truth.inputs.empty();  // an input signal (held from each row on)
+  // An input signal (held from each row on): one value per row, as the
+  // signals drive single-input models only.
+  data.nu = sc.truth.inputs.empty() ? 0 : 1;
   for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
     const auto& row = truth.rows[k];
     data.t.push_back(row[0]);
-    if (data.has_input) data.u.push_back(sc.truth.inputs[k]);
+    if (data.nu > 0) data.u.push_back(sc.truth.inputs[k]);
     data.lines.push_back(long(k));
     for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
     for (int j = 0; j < data.m; ++j)

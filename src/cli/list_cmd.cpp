@@ -43,7 +43,8 @@ void ModelJson(const ModelEntry& model, JsonWriter* json) {
     j.BeginObject().Key("name").Value(meas.name).Key("outputs").Value(meas.outputs).EndObject();
   }
   j.EndArray();
-  j.Key("has_input").Value(m->has_input).Key("stiff").Value(m->stiff);
+  j.Key("has_input").Value(m->has_input()).Key("inputs").Value(m->inputs);
+  j.Key("stiff").Value(m->stiff);
   j.Key("discrete_time").Value(m->discrete_time);
   j.Key("invariants").Value(m->invariants);
   j.EndObject();
@@ -66,10 +67,17 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
     for (size_t k = 0; k < m->measurements[i].outputs.size(); ++k)
       out << (k ? "," : "") << m->measurements[i].outputs[k];
   }
-  if (m->has_input)
-    out << "\n    input:        " << m->input_name << " (data column '" << m->input_name
-        << (m->input_name == "u" ? "'" : "' or 'u'")
+  if (m->inputs.size() == 1)
+    out << "\n    input:        " << m->inputs[0] << " (data column '" << m->inputs[0]
+        << (m->inputs[0] == "u" ? "'" : "' or 'u'")
         << ", held between samples; or a constant --input)";
+  if (m->inputs.size() > 1) {
+    out << "\n    inputs:       ";
+    for (size_t i = 0; i < m->inputs.size(); ++i)
+      out << (i ? ", " : "") << m->inputs[i]
+          << (m->input_units[i].empty() ? "" : " [" + m->input_units[i] + "]");
+    out << " (data columns of these names, held between samples; or --input a,b,...)";
+  }
   if (m->discrete_time) out << "\n    time:         discrete (a step map; --integrator discrete)";
   if (!m->invariants.empty()) {
     out << "\n    invariants:   ";

@@ -88,8 +88,10 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   } else {
     j.Key("substeps").Value(spec.transition.substeps);
   }
-  if (spec.inputs.empty())
+  if (spec.inputs.empty() && spec.input.size() > 1)
     j.Key("input").Value(spec.input);
+  else if (spec.inputs.empty())
+    j.Key("input").Value(spec.input.empty() ? 0.0 : spec.input[0]);
   else if (data_path.empty())
     j.Key("input").Value(input_text + ", sampled at the output times, zero-order hold");
   else
@@ -141,20 +143,32 @@ std::vector<std::pair<std::string, double>> ConfigParams(
 
 // --input: a constant, or a seeded signal (src/sim/input_signal.h) sampled
 // at the output times k dt, held to the next and written as the input's
-// column after the states.
+// column after the states. A model with several inputs takes one constant
+// per input ("1.5,0"); recorded inputs come with --data.
 void SetInput(const po::variables_map& vm, const ModelEntry& model, SimulationSpec* spec) {
-  const InputSignal signal = ParseInputSignal(vm["input"].as<std::string>(), "--input");
-  if ((signal.kind != InputSignal::kConstant || signal.mean != 0) && !model.has_input)
+  const std::string text = vm["input"].as<std::string>();
+  if (model.inputs.size() > 1) {
+    if (vm["input"].defaulted()) return;  // 0 for every input
+    spec->input = ParseList(text, "--input");
+    if (spec->input.size() != model.inputs.size())
+      throw InputError(
+          "--input: " + std::to_string(spec->input.size()) + " value(s) for model '" + model.name +
+          "' with " + std::to_string(model.inputs.size()) +
+          " inputs (one constant each, comma-separated; or recorded ones with --data)");
+    return;
+  }
+  const InputSignal signal = ParseInputSignal(text, "--input");
+  if ((signal.kind != InputSignal::kConstant || signal.mean != 0) && !model.has_input())
     throw InputError("--input: model '" + model.name + "' has no input");
   if (signal.kind == InputSignal::kConstant) {
-    spec->input = signal.mean;
+    if (model.has_input()) spec->input = {signal.mean};
     return;
   }
   spec->times = OutputTimes(*spec);
   if (const std::string why = signal.Covers(spec->times.front(), spec->times.back()); !why.empty())
     throw InputError("--input: " + why);
   for (double t : spec->times) spec->inputs.push_back(signal.At(t));
-  spec->input_column = model.input_name;
+  spec->input_columns = model.inputs;
 }
 
 // --data FILE: the output times and (for a model with an input) the input
@@ -169,7 +183,7 @@ void UseRecordedSchedule(const po::variables_map& vm, const ModelEntry& model,
       LoadInputRecord(vm["data"].as<std::string>(), model, ParseColumnRenames(vm));
   spec->times = record.t;
   spec->inputs = record.u;
-  if (model.has_input) spec->input_column = model.input_name;
+  spec->input_columns = model.inputs;
 }
 
 }  // namespace

@@ -43,7 +43,15 @@ void PrintOutputError(const ModelEntry& model, const FilterSpec& spec, const Out
   }
   PrintX0(FitX0(model, spec, r, runs));
   for (const std::string& s : r.identifiability) std::cout << "  note: " << s << "\n";
-  std::cout << "\nresidual sd   " << r.residual_sd << "\nfit RMSE      ";
+  std::cout << "\nresidual sd   ";
+  if (r.residual_sds.size() > 1) {  // weighted by R: each output's in its own units
+    for (size_t j = 0; j < r.residual_sds.size(); ++j)
+      std::cout << (j ? ", " : "") << meas.outputs[j] << " " << r.residual_sds[j];
+    std::cout << "  (outputs weighted by 1/sqrt(R_jj), --init-r-diag)";
+  } else {
+    std::cout << r.residual_sd;
+  }
+  std::cout << "\nfit RMSE      ";
   for (size_t j = 0; j < r.rmse.size(); ++j)
     std::cout << (j ? ", " : "") << meas.outputs[j] << " " << r.rmse[j];
   std::cout << "\nwall time     " << r.wall_s << " s\n";
@@ -73,6 +81,8 @@ std::string OutputErrorJson(const ModelEntry& model, const FilterSpec& spec,
   j.Key("identifiability").Value(r.identifiability);
   j.Key("cost_initial").Value(r.cost_initial).Key("cost").Value(r.cost);
   j.Key("residual_sd").Value(r.residual_sd).Key("fit_rmse").Object(meas.outputs, r.rmse);
+  j.Key("residual_sds").Object(meas.outputs, r.residual_sds);
+  j.Key("output_weights").Object(meas.outputs, r.output_weights);
   j.Key("windows").Value(r.windows).Key("residuals").Value(r.residuals);
   j.Key("iterations").Value(r.iterations).Key("wall_s").Value(r.wall_s);
   if (!validations.empty()) {

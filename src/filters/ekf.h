@@ -57,7 +57,7 @@ class Ekf final : public FilterCommon<Model, Meas> {
 
   std::string Name() const override { return options_.iterations > 1 ? "iekf" : "ekf"; }
   void Initialize(const State& mean, const StateCov& cov) override { this->SetPrior(mean, cov); }
-  void SetInput(double u) override { transition_->SetInput(u); }
+  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
@@ -82,7 +82,8 @@ class Ekf final : public FilterCommon<Model, Meas> {
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status =
-        EkfUpdate<Model, Meas>(x_, P_, z, R, params_, options_.iterations, &u, &why);
+        EkfUpdate<Model, Meas>(x_, P_, z, R, transition_->input(), params_, options_.iterations,
+                               &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);
@@ -91,7 +92,7 @@ class Ekf final : public FilterCommon<Model, Meas> {
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
     result.residual = WrapResidual<kM>(
-        z - MeasurementAndJacobian<Model, Meas>(x_, params_, nullptr), Meas::kAngleOutputs);
+        z - MeasurementAndJacobian<Model, Meas>(x_, transition_->input(), params_, nullptr), Meas::kAngleOutputs);
     return result;
   }
 

@@ -89,10 +89,14 @@ class Filter {
   // Corrects with measurement z and measurement-noise covariance R.
   virtual StepResult<kM> Update(const Measurement& z, const MeasurementCov& measurement_noise) = 0;
 
-  // The input u held over the next Predict. Filters with a Transition forward
-  // it to the transition (equivalent to transition->SetInput(u)); the
-  // LinearizedKf stores it. The default ignores it (models without input).
-  virtual void SetInput(double /*u*/) {}
+  // The input u: held over the next Predict, and seen by the next Update of
+  // a measurement h(x, u) (the run loops set the input of row k before its
+  // update; zero-order hold keeps it over [t_k, t_k+1)). Filters with a
+  // Transition forward it to the transition (equivalent to
+  // transition->SetInput(u)); the LinearizedKf stores it. The default ignores
+  // it (models without input). InputOf<Model>: a double for models with at
+  // most one input.
+  virtual void SetInput(const InputOf<Model>& /*u*/) {}
 
   virtual const State& mean() const = 0;
   virtual const StateCov& cov() const = 0;

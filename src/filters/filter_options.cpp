@@ -32,7 +32,11 @@ bool KfOptions::IsValid(std::string* error) const {
       return fail("linearize-at: operating point component " + std::to_string(i) +
                   " is not finite");
   }
-  if (!std::isfinite(operating_input)) return fail("input: the operating input u* is not finite");
+  for (size_t i = 0; i < operating_input.size(); ++i) {
+    if (!std::isfinite(operating_input[i]))
+      return fail("input: the operating input u* component " + std::to_string(i) +
+                  " is not finite");
+  }
   return true;
 }
 

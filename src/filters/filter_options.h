@@ -24,8 +24,8 @@ struct EkfOptions {
 struct KfOptions {
   // x*; empty = the prior mean given to Initialize().
   std::vector<double> operating_point;
-  // u*.
-  double operating_input = 0.0;
+  // u*, one value per model input; empty = 0 for every input.
+  std::vector<double> operating_input;
 
   bool IsValid(std::string* error) const;
   // IsValid, and an operating point (when given) of n components.

@@ -14,13 +14,15 @@
 // Model (deviations from the operating point, delta = x - x*, angle states of
 // delta wrapped):
 //   d/dt delta = A delta + B (u - u*) + c,   A = df/dx, B = df/du, c = f(x*, u*)
-//   z ~= h(x*) + H delta,                    H = dh/dx at x*
+//   z ~= h(x*, u*) + H delta + D (u - u*),   H = dh/dx, D = dh/du at (x*, u*)
+// (D = 0 unless the measurement sees the input; u in the update is the input
+// at the measurement time, SetInput's last value).
 // Exact discretisation over dt (u held constant), by the exponential of the
 // augmented matrix
-//   exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt) = [[Phi, Gamma, d], [0, 1, 0], [0, 0, 1]]
+//   exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt) = [[Phi, Gamma, d], [0, I, 0], [0, 0, 1]]
 //   delta+ = Phi delta + Gamma (u - u*) + d.
-// A and H are exact (AD); B is a fourth-order central difference (see
-// InputJacobian in linearize.h). The discretisation is cached for the last dt.
+// A and H are exact (AD); B and D are fourth-order central differences (see
+// InputDerivative in linearize.h). The discretisation is cached for the last dt.
 // A discrete-time model (kDiscreteTime) is its own discretisation: its map
 // over dt linearised at (x*, u*), Phi = dStep/dx, Gamma = dStep/du,
 // d = Step(x*, u*) - x* (StepMapJacobians); the transition's substeps do not
@@ -59,15 +61,21 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   using typename Base::State;
   using typename Base::StateCov;
   using Params = typename Model::Params;
+  static constexpr int kU = kInputCols<Model>;
   static_assert(kN <= kMaxGainStates, "StepResult::gain holds at most kMaxGainStates rows");
 
   // Throws InputError for invalid options or an operating point of the wrong
   // length.
   LinearizedKf(const Params& params, const KfOptions& options)
-      : params_(params), input_(options.operating_input) {
-    lin_.u_star = options.operating_input;
+      : params_(params) {
     std::string error;
     if (!options.IsValid(&error)) throw InputError(error);
+    const size_t inputs = options.operating_input.size();
+    if (inputs != 0 && int(inputs) != kInputDim<Model>)
+      throw InputError("operating input has " + std::to_string(inputs) + " values, model " +
+                       Model::kName + " has " + std::to_string(kInputDim<Model>) + " inputs");
+    input_ = InputFrom<Model>(inputs ? options.operating_input.data() : nullptr);
+    lin_.u_star = InputColumn<Model>(input_);
     if (!options.operating_point.empty()) {
       if (int(options.operating_point.size()) != kN)
         throw InputError("operating point has " + std::to_string(options.operating_point.size()) +
@@ -89,7 +97,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     }
   }
 
-  void SetInput(double u) override { input_ = u; }
+  void SetInput(const InputOf<Model>& u) override { input_ = u; }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     const double dt = t1 - t0;
@@ -114,68 +122,73 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       return FailResult(ready, error_);
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status = KfUpdate<Model, Meas>(lin_, x_, P_, z, R, &u, &why);
+    const FilterStatus status = KfUpdate<Model, Meas>(lin_, input_, x_, P_, z, R, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);
     x_ = u.x;
     P_ = u.P;
     result.gain = u.K;
-    // post-fit residual eps = wrap(z - h(x*) - H wrap(x+ - x*))
+    // post-fit residual eps = wrap(z - h(x*, u*) - H wrap(x+ - x*) - D (u - u*))
     result.residual = WrapResidual<kM>(
-        z - lin_.h_star - lin_.H * WrapResidual<kN>(x_ - lin_.x_star, Model::kAngleStates),
+        z - lin_.h_star - lin_.H * WrapResidual<kN>(x_ - lin_.x_star, Model::kAngleStates) -
+            lin_.D * (InputColumn<Model>(input_) - lin_.u_star),
         Meas::kAngleOutputs);
     return result;
   }
 
   // The continuous linearisation at (x*, u*) and the measurement Jacobian.
   const Mat<kN, kN>& A() const { return A_; }
-  const Vec<double, kN>& B() const { return B_; }
+  const Mat<kN, kU>& B() const { return B_; }
   const Vec<double, kN>& c() const { return c_; }
   const Mat<kM, kN>& H() const { return lin_.H; }
   const State& operating_point() const { return lin_.x_star; }
   // What the steps (kalman_step.h) use: the linearisation, and the
   // discretisation of the last Predict (Phi, Gamma, d above).
-  const KfLinearization<kN, kM>& linearization() const { return lin_; }
-  const KfDiscretization<kN>& discretization() const { return step_; }
+  const KfLinearization<kN, kM, kU>& linearization() const { return lin_; }
+  const KfDiscretization<kN, kU>& discretization() const { return step_; }
   const Mat<kN, kN>& Phi() const { return step_.phi; }
-  const Vec<double, kN>& Gamma() const { return step_.gamma; }
+  const Mat<kN, kU>& Gamma() const { return step_.gamma; }
   const Vec<double, kN>& d() const { return step_.drift; }
 
  private:
-  // A = df/dx, B = df/du, c = f(x*, u*), h* = h(x*), H = dh/dx at (x*, u*).
+  // A = df/dx, B = df/du, c = f(x*, u*), h* = h(x*, u*), H = dh/dx and
+  // D = dh/du at (x*, u*).
   void Linearize() {
+    const InputOf<Model> u_star = InputFrom<Model>(lin_.u_star.data());
     if constexpr (!kDiscreteTime<Model>) {  // a step map is linearised per dt (Discretize)
-      A_ = ContinuousJacobian<Model>(lin_.x_star, lin_.u_star, params_);
-      B_ = InputJacobian<Model>(lin_.x_star, lin_.u_star, params_);
-      c_ = ContinuousRhs<Model>(lin_.x_star, lin_.u_star, params_);
+      A_ = ContinuousJacobian<Model>(lin_.x_star, u_star, params_);
+      B_ = InputJacobian<Model>(lin_.x_star, u_star, params_);
+      c_ = ContinuousRhs<Model>(lin_.x_star, u_star, params_);
     }
-    lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, params_, &lin_.H);
+    lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, u_star, params_, &lin_.H);
+    lin_.D = MeasurementInputJacobian<Model, Meas>(lin_.x_star, u_star, params_);
     linear_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() &&
-                     lin_.h_star.allFinite();
+                     lin_.h_star.allFinite() && lin_.D.allFinite();
     cached_dt_ = -1.0;  // invalidate the discretisation cache
   }
 
-  // [[Phi, Gamma, d], [0, 1, 0], [0, 0, 1]] = exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt),
+  // [[Phi, Gamma, d], [0, I, 0], [0, 0, 1]] = exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt),
   // recomputed only when dt changes by more than 1e-12 relative.
   void Discretize(double dt) {
     if (cached_dt_ >= 0.0 && std::abs(dt - cached_dt_) <= 1e-12 * std::max(1.0, cached_dt_)) return;
     if constexpr (kDiscreteTime<Model>) {
       // A step map: Phi = dStep/dx, Gamma = dStep/du, d = Step(x*, u*) - x*.
-      step_.drift =
-          StepMapJacobians<Model>(lin_.x_star, lin_.u_star, dt, params_, &step_.phi, &step_.gamma) -
-          lin_.x_star;
+      step_.drift = StepMapJacobians<Model>(lin_.x_star, InputFrom<Model>(lin_.u_star.data()), dt,
+                                            params_, &step_.phi, &step_.gamma) -
+                    lin_.x_star;
       cached_dt_ = dt;
       return;
     }
-    Mat<kN + 2, kN + 2> augmented = Mat<kN + 2, kN + 2>::Zero();
+    constexpr int kA = kN + kU + 1;
+    Mat<kA, kA> augmented = Mat<kA, kA>::Zero();
     augmented.template topLeftCorner<kN, kN>() = A_ * dt;
-    augmented.template block<kN, 1>(0, kN) = B_ * dt;
-    augmented.template block<kN, 1>(0, kN + 1) = c_ * dt;
-    const Mat<kN + 2, kN + 2> e = augmented.exp();
+    augmented.template block<kN, kU>(0, kN) = B_ * dt;
+    augmented.template block<kN, 1>(0, kN + kU) = c_ * dt;
+    const Mat<kA, kA> e = augmented.exp();
     step_.phi = e.template topLeftCorner<kN, kN>();
-    step_.gamma = e.template block<kN, 1>(0, kN);
-    step_.drift = e.template block<kN, 1>(0, kN + 1);
+    step_.gamma = e.template block<kN, kU>(0, kN);
+    step_.drift = e.template block<kN, 1>(0, kN + kU);
     cached_dt_ = dt;
   }
 
@@ -188,13 +201,13 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   Params params_;
   bool fixed_point_ = false;
   bool linear_finite_ = false;
-  KfLinearization<kN, kM> lin_;  // x*, u*, h(x*), H
-  double input_;
+  KfLinearization<kN, kM, kU> lin_;  // x*, u*, h(x*, u*), H, D
+  InputOf<Model> input_;
   Mat<kN, kN> A_ = Mat<kN, kN>::Zero();
-  Vec<double, kN> B_ = Vec<double, kN>::Zero();
+  Mat<kN, kU> B_ = Mat<kN, kU>::Zero();
   Vec<double, kN> c_ = Vec<double, kN>::Zero();
   double cached_dt_ = -1.0;
-  KfDiscretization<kN> step_;  // Phi, Gamma, d of cached_dt_
+  KfDiscretization<kN, kU> step_;  // Phi, Gamma, d of cached_dt_
 };
 
 // The filter that FilterSpec::filter = KfOptions runs (MakeFilter,

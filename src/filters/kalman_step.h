@@ -1,13 +1,14 @@
 // The linearised Kalman filter's equations, written once for any scalar T:
 // LinearizedKf (kalman.h) runs them in double, the tuner's likelihood
 // (adaptive/likelihood.h) with ceres::Jet. The linearisation (x*, u*, h(x*),
-// H) and the discretisation (Phi, Gamma, d) are plain doubles: they do not
-// depend on the noise.
+// H, D) and the discretisation (Phi, Gamma, d) are plain doubles: they do not
+// depend on the noise. U: the number of input columns (kInputCols, one for
+// a model without input, whose u - u* is then 0).
 //
 // Predict (delta = wrap(x - x*), angle states wrapped):
 //   x- = x* + Phi delta + Gamma (u - u*) + d,   P- = Phi P Phi^T + Q
 // Update:
-//   z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
+//   z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
 //   S = H P- H^T + R,  K = P- H^T S^-1
 //   x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
 #ifndef ESTLAB_FILTERS_KALMAN_STEP_H_
@@ -22,32 +23,43 @@
 namespace estlab {
 
 // The model linearised about (x*, u*): what the KF steps need.
-template <int N, int M>
+template <int N, int M, int U = 1>
 struct KfLinearization {
   Vec<double, N> x_star = Vec<double, N>::Zero();
-  double u_star = 0.0;
-  Vec<double, M> h_star = Vec<double, M>::Zero();  // h(x*)
-  Mat<M, N> H = Mat<M, N>::Zero();                 // dh/dx at x*
+  Vec<double, U> u_star = Vec<double, U>::Zero();
+  Vec<double, M> h_star = Vec<double, M>::Zero();  // h(x*, u*)
+  Mat<M, N> H = Mat<M, N>::Zero();                 // dh/dx at (x*, u*)
+  Mat<M, U> D = Mat<M, U>::Zero();                 // dh/du at (x*, u*)
 };
 // Its exact discretisation over one step length.
-template <int N>
+template <int N, int U = 1>
 struct KfDiscretization {
   Mat<N, N> phi = Mat<N, N>::Identity();
-  Vec<double, N> gamma = Vec<double, N>::Zero();
+  Mat<N, U> gamma = Mat<N, U>::Zero();
   Vec<double, N> drift = Vec<double, N>::Zero();
 };
 
+// The input as a column of kInputCols<Model> values (a zero for a model
+// without input).
+template <class Model>
+Vec<double, kInputCols<Model>> InputColumn(const InputOf<Model>& u) {
+  Vec<double, kInputCols<Model>> v;
+  for (int i = 0; i < kInputCols<Model>; ++i) v(i) = InputComponent<Model>(u, i);
+  return v;
+}
+
 template <class Model, int M, class T = double>
-void KfPredict(const KfLinearization<Model::kStateDim, M>& lin,
-               const KfDiscretization<Model::kStateDim>& step, double u,
-               const MatT<T, Model::kStateDim, Model::kStateDim>& Q, Vec<T, Model::kStateDim>* x,
-               MatT<T, Model::kStateDim, Model::kStateDim>* P) {
+void KfPredict(const KfLinearization<Model::kStateDim, M, kInputCols<Model>>& lin,
+               const KfDiscretization<Model::kStateDim, kInputCols<Model>>& step,
+               const InputOf<Model>& u, const MatT<T, Model::kStateDim, Model::kStateDim>& Q,
+               Vec<T, Model::kStateDim>* x, MatT<T, Model::kStateDim, Model::kStateDim>* P) {
   constexpr int N = Model::kStateDim;
   // delta = wrap(x - x*);  x- = x* + Phi delta + Gamma (u - u*) + d
   const Vec<T, N> x_star = lin.x_star.template cast<T>();
   const Vec<T, N> delta = WrapResidual<N, T>(*x - x_star, Model::kAngleStates);
-  *x = x_star + step.phi.template cast<T>() * delta +
-       step.gamma.template cast<T>() * T(u - lin.u_star) + step.drift.template cast<T>();
+  const Vec<double, N> forced = step.gamma * (InputColumn<Model>(u) - lin.u_star);
+  *x = x_star + step.phi.template cast<T>() * delta + forced.template cast<T>() +
+       step.drift.template cast<T>();
   // P- = Phi P Phi^T + Q
   MatT<T, N, N> P_pred =
       step.phi.template cast<T>() * (*P) * step.phi.transpose().template cast<T>() + Q;
@@ -56,18 +68,19 @@ void KfPredict(const KfLinearization<Model::kStateDim, M>& lin,
 }
 
 template <class Model, class Meas, class T = double>
-FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim>& lin,
-                      const Vec<T, Model::kStateDim>& x,
+FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim, kInputCols<Model>>& lin,
+                      const InputOf<Model>& u, const Vec<T, Model::kStateDim>& x,
                       const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                       const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
                       GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const MatT<T, M, N> H = lin.H.template cast<T>();
-  // z^ = h(x*) + H wrap(x- - x*),  nu = wrap(z - z^)
+  // z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
   const Vec<T, N> delta =
       WrapResidual<N, T>(x - lin.x_star.template cast<T>(), Model::kAngleStates);
-  const Vec<T, M> z_pred = lin.h_star.template cast<T>() + H * delta;
+  const Vec<double, M> fed = lin.h_star + lin.D * (InputColumn<Model>(u) - lin.u_star);
+  const Vec<T, M> z_pred = fed.template cast<T>() + H * delta;
   out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);
   // S = H P H^T + R,  K = P H^T S^-1
   if (!KalmanGain<N, M, T>(H, P, R, &out->S, &out->L, &out->K)) {

@@ -3,14 +3,15 @@
 //
 // Usage:
 //   Mat<4, 4> A = ContinuousJacobian<models::CartPole>(x_star, 0.0, params);
-//   Vec<double, 4> B = InputJacobian<models::CartPole>(x_star, 0.0, params);
+//   Mat<4, 1> B = InputJacobian<models::CartPole>(x_star, 0.0, params);
 //   Mat<2, 4> H;
 //   Vec<double, 2> hx = MeasurementAndJacobian<models::CartPole,
-//                                              models::CartPole::XTheta>(x, params, &H);
+//                                              models::CartPole::XTheta>(x, u, params, &H);
 //
 // A = df/dx and H = dh/dx are exact (forward-mode AD with ceres::Jet).
-// WARNING: B = df/du is a central difference, because Model::Rhs takes the
-// input as a plain double (no Jet can flow through it); see InputJacobian.
+// WARNING: B = df/du and D = dh/du are central differences, because models
+// take the input as plain doubles (no Jet can flow through it); see
+// InputDerivative.
 // Include only where models are instantiated (this pulls in ceres/jet.h).
 #ifndef ESTLAB_FILTERS_LINEARIZE_H_
 #define ESTLAB_FILTERS_LINEARIZE_H_
@@ -28,7 +29,8 @@ namespace estlab {
 
 // f(x, u) of the (time-invariant) model, evaluated at t = 0.
 template <class Model>
-Vec<double, Model::kStateDim> ContinuousRhs(const Vec<double, Model::kStateDim>& x, double u,
+Vec<double, Model::kStateDim> ContinuousRhs(const Vec<double, Model::kStateDim>& x,
+                                            const InputOf<Model>& u,
                                             const typename Model::Params& params) {
   return Model::Rhs(0.0, x, u, params);
 }
@@ -36,7 +38,7 @@ Vec<double, Model::kStateDim> ContinuousRhs(const Vec<double, Model::kStateDim>&
 // A = df/dx (x, u), exact by automatic differentiation of Model::Rhs.
 template <class Model>
 Mat<Model::kStateDim, Model::kStateDim> ContinuousJacobian(const Vec<double, Model::kStateDim>& x,
-                                                           double u,
+                                                           const InputOf<Model>& u,
                                                            const typename Model::Params& params) {
   constexpr int N = Model::kStateDim;
   Mat<N, N> A;
@@ -49,22 +51,40 @@ Mat<Model::kStateDim, Model::kStateDim> ContinuousJacobian(const Vec<double, Mod
   return A;
 }
 
-// B = df/du (x, u) by the fourth-order central difference of f(u) (any
-// vector function of the input, InputDerivative)
-//   B = [f(u - 2h) - 8 f(u - h) + 8 f(u + h) - f(u + 2h)] / (12 h),
-// h = 1e-3 max(1, |u|): truncation error O(h^4 d^5f/du^5), rounding about
-// 2 eps |f| / h. For inputs that enter affinely (forces on mechanical models)
-// the truncation error is zero and only the rounding remains.
-template <class F>
-auto InputDerivative(F&& f, double u) {
-  const double h = 1e-3 * std::max(1.0, std::abs(u));
-  return decltype(f(u))((f(u - 2.0 * h) - 8.0 * f(u - h) + 8.0 * f(u + h) - f(u + 2.0 * h)) /
-                        (12.0 * h));
+// d f / d u (a matrix with one column per input; a zero column without
+// input) by the fourth-order central difference of f along each input
+// component i:
+//   col i = [f(u - 2h e_i) - 8 f(u - h e_i) + 8 f(u + h e_i) - f(u + 2h e_i)] / (12 h),
+// h = 1e-3 max(1, |u_i|): truncation error O(h^4 d^5f/du_i^5), rounding about
+// 2 eps |f| / h. For inputs that enter affinely (forces on mechanical models,
+// offsets) the truncation error is zero and only the rounding remains.
+// f: any vector function of InputOf<Model>.
+template <class Model, class F>
+auto InputDerivative(F&& f, const InputOf<Model>& u) {
+  using Column = decltype(f(u));
+  constexpr int R = Column::RowsAtCompileTime;
+  Mat<R, kInputCols<Model>> D = Mat<R, kInputCols<Model>>::Zero();
+  if constexpr (kInputDim<Model> > 0) {
+    for (int i = 0; i < kInputCols<Model>; ++i) {
+      const double ui = InputComponent<Model>(u, i);
+      const double h = 1e-3 * std::max(1.0, std::abs(ui));
+      auto at = [&](double v) {
+        InputOf<Model> w = u;
+        SetInputComponent<Model>(&w, i, v);
+        return Column(f(w));
+      };
+      D.col(i) = (at(ui - 2.0 * h) - 8.0 * at(ui - h) + 8.0 * at(ui + h) - at(ui + 2.0 * h)) /
+                 (12.0 * h);
+    }
+  }
+  return D;
 }
 template <class Model>
-Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>& x, double u,
-                                            const typename Model::Params& params) {
-  return InputDerivative([&](double v) { return ContinuousRhs<Model>(x, v, params); }, u);
+Mat<Model::kStateDim, kInputCols<Model>> InputJacobian(const Vec<double, Model::kStateDim>& x,
+                                                       const InputOf<Model>& u,
+                                                       const typename Model::Params& params) {
+  return InputDerivative<Model>(
+      [&](const InputOf<Model>& v) { return ContinuousRhs<Model>(x, v, params); }, u);
 }
 
 // A discrete-time model's map over dt linearised at (x*, u*):
@@ -72,13 +92,15 @@ Vec<double, Model::kStateDim> InputJacobian(const Vec<double, Model::kStateDim>&
 // F = dStep/dx exact (AD), G = dStep/du by InputDerivative's central
 // difference. Returns Step(x*, u*).
 template <class Model>
-Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDim>& x, double u,
-                                               double dt, const typename Model::Params& params,
+Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDim>& x,
+                                               const InputOf<Model>& u, double dt,
+                                               const typename Model::Params& params,
                                                Mat<Model::kStateDim, Model::kStateDim>* F,
-                                               Vec<double, Model::kStateDim>* G) {
+                                               Mat<Model::kStateDim, kInputCols<Model>>* G) {
   constexpr int N = Model::kStateDim;
-  *G = InputDerivative(
-      [&](double v) { return Model::template Step<double>(0.0, x, dt, v, params); }, u);
+  *G = InputDerivative<Model>(
+      [&](const InputOf<Model>& v) { return Model::template Step<double>(0.0, x, dt, v, params); },
+      u);
   return ValueAndJacobian<N, N>(
       [&](const auto& xj) {
         using T = typename std::decay_t<decltype(xj)>::Scalar;
@@ -87,26 +109,40 @@ Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDi
       x, F);
 }
 
-// h(x), and H = dh/dx (x) by automatic differentiation when H is not null,
-// for x of any scalar T (double; ceres::Jet, whose H is then a nested Jet:
-// src/ode/nested_jet.h).
+// h(x, u), and H = dh/dx (x, u) by automatic differentiation when H is not
+// null, for x of any scalar T (double; ceres::Jet, whose H is then a nested
+// Jet: src/ode/nested_jet.h). u reaches only the measurements that see the
+// input (EvalMeasurement, models/model.h).
 // Prm: Params, or ParamsT<T> when parameters are estimated (lifted to the
 // nested Jet inside the Jacobian).
 template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 Vec<T, Meas::kDim> MeasurementAndJacobian(
-    const Vec<T, Model::kStateDim>& x, const Prm& params,
+    const Vec<T, Model::kStateDim>& x, const InputOf<Model>& u, const Prm& params,
     std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  if (H == nullptr) return Meas::template Eval<T>(x, params);
+  if (H == nullptr) return EvalMeasurement<Model, Meas, T>(x, u, params);
   return ValueAndJacobianT<M, N>(
       [&](const auto& xj) {
         using S = typename std::decay_t<decltype(xj)>::Scalar;
-        return Meas::template Eval<S>(xj, ParamsAs<Model, S>(params));
+        return EvalMeasurement<Model, Meas, S>(xj, u, ParamsAs<Model, S>(params));
       },
       x, H);
 }
 
+// D = dh/du (x, u) of a measurement (zero for one that does not see the
+// input), by InputDerivative's central difference.
+template <class Model, class Meas>
+Mat<Meas::kDim, kInputCols<Model>> MeasurementInputJacobian(
+    const Vec<double, Model::kStateDim>& x, const InputOf<Model>& u,
+    const typename Model::Params& params) {
+  if constexpr (MeasurementSeesInput<Meas, Model>)
+    return InputDerivative<Model>(
+        [&](const InputOf<Model>& v) { return EvalMeasurement<Model, Meas, double>(x, v, params); },
+        u);
+  else
+    return Mat<Meas::kDim, kInputCols<Model>>::Zero();
+}
 }  // namespace estlab
 
 #endif  // ESTLAB_FILTERS_LINEARIZE_H_

@@ -108,7 +108,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   }
 
   std::string Name() const override { return "pf"; }
-  void SetInput(double u) override { transition_->SetInput(u); }
+  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
 
   // Draws x_i = x0 + L0 e_i, L0 L0^T = P0 (P0 may be singular), uniform weights.
   void Initialize(const State& mean, const StateCov& cov) override {
@@ -210,7 +210,9 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     ComputeMoments();
     if (!BeliefFinite(x_, P_))
       return FailResult(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
-    result.residual = WrapResidual<kM>(z - Meas::Eval(x_, params_), Meas::kAngleOutputs);
+    result.residual = WrapResidual<kM>(
+        z - EvalMeasurement<Model, Meas, double>(x_, transition_->input(), params_),
+        Meas::kAngleOutputs);
     resampled_ = ess_ < options_.ess_threshold * double(n);
     if (resampled_) ResampleParticles();
     return result;
@@ -242,17 +244,19 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     return e;
   }
 
-  // predicted_measurements_.col(i) = h(x_i); kPacketWidth particles per call
+  // predicted_measurements_.col(i) = h(x_i, u); kPacketWidth particles per call
   // for a packet model (src/core/packet.h).
   void EvalMeasurements() {
+    const InputOf<Model>& u = transition_->input();
     if constexpr (kPacketModel<Model>) {
       for (Eigen::Index first = 0; first < particles_.cols(); first += kPacketWidth)
-        ScatterColumns<kM>(
-            Meas::template Eval<Packet>(GatherColumns<kN>(particles_, first), params_), first,
-            &predicted_measurements_);
+        ScatterColumns<kM>(EvalMeasurement<Model, Meas, Packet>(
+                               GatherColumns<kN>(particles_, first), u, params_),
+                           first, &predicted_measurements_);
     } else {
       for (Eigen::Index i = 0; i < particles_.cols(); ++i)
-        predicted_measurements_.col(i) = Meas::Eval(State(particles_.col(i)), params_);
+        predicted_measurements_.col(i) =
+            EvalMeasurement<Model, Meas, double>(State(particles_.col(i)), u, params_);
     }
   }
 

@@ -82,7 +82,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     this->SetPrior(mean, cov);
     have_propagated_ = false;
   }
-  void SetInput(double u) override { transition_->SetInput(u); }
+  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
@@ -121,7 +121,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status =
-        SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z, R, params_, &u, &why);
+        SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z, R,
+                                 transition_->input(), params_, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);
@@ -129,7 +130,9 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     P_ = u.P;
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
-    result.residual = WrapResidual<kM>(z - Meas::Eval(x_, params_), Meas::kAngleOutputs);
+    result.residual = WrapResidual<kM>(
+        z - EvalMeasurement<Model, Meas, double>(x_, transition_->input(), params_),
+        Meas::kAngleOutputs);
     return result;
   }
 

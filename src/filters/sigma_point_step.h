@@ -81,13 +81,13 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
                          PointsT<T, Meas::kDim>* Z, const Vec<T, Model::kStateDim>& x_prior,
                          const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                          const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                         const Prm& params, GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out,
+                         const InputOf<Model>& u, const Prm& params, GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out,
                          std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  // Z_i = h(Y_i),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)
+  // Z_i = h(Y_i, u),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)
   for (Eigen::Index i = 0; i < Y.cols(); ++i)
-    Z->col(i) = Meas::template Eval<T>(Vec<T, N>(Y.col(i)), params);
+    Z->col(i) = EvalMeasurement<Model, Meas, T>(Vec<T, N>(Y.col(i)), u, params);
   const Vec<T, M> z_pred = WeightedMean<M>(*Z, set.mean_weights);
   // S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,  C = sum_i Wc_i dY_i dZ_i^T
   out->S = WeightedCov<M>(*Z, z_pred, set.cov_weights);

@@ -177,12 +177,26 @@ std::string HeaderTop(const ModelFile& m, const std::string& guard) {
          "#include \"src/modelfile/model_functions.h\"\n\nnamespace estlab::user_models {\n\n";
 }
 
+// kInputNames and kInputUnits (for a model with inputs).
+std::string InputNames(const ModelFile& m) {
+  if (m.inputs.empty()) return "";
+  std::string names, units;
+  for (const InputDecl& input : m.inputs) {
+    if (!names.empty()) names += ", ", units += ", ";
+    names += CppStringLiteral(input.name);
+    units += CppStringLiteral(input.unit);
+  }
+  const std::string array =
+      "  static constexpr std::array<const char*, " + std::to_string(m.inputs.size()) + "> ";
+  return array + "kInputNames = {" + names + "};\n" + array + "kInputUnits = {" + units + "};\n";
+}
+
 std::string ModelConstants(const ModelFile& m) {
   return "  static constexpr const char* kName = " + CppStringLiteral(m.name) +
          ";\n  static constexpr const char* kDescription = " + CppStringLiteral(m.description) +
          ";\n  static constexpr int kStateDim = " + std::to_string(m.states.size()) +
-         ";\n  static constexpr bool kHasInput = " + Bool(m.input.has_value()) +
-         ";\n  static constexpr bool kStiff = " + Bool(m.stiff) +
+         ";\n  static constexpr int kInputDim = " + std::to_string(m.inputs.size()) + ";\n" +
+         InputNames(m) + "  static constexpr bool kStiff = " + Bool(m.stiff) +
          ";\n  // true for a [step] model: Step(t, x, dt, u, p) gives x(t + dt), no Rhs.\n"
          "  static constexpr bool kDiscreteTime = " +
          Bool(m.discrete) + ";\n";

@@ -10,7 +10,7 @@
 //   // "src/core/types.h" and "src/modelfile/model_functions.h".
 //
 // What is generated (N states, M outputs per measurement):
-//   kName, kDescription, kStateDim, kHasInput, kStiff, kDiscreteTime,
+//   kName, kDescription, kStateDim, kInputDim, kInputNames, kInputUnits, kStiff, kDiscreteTime,
 //   kStateNames, kStateUnits, kAngleStates, kPositionRatePairs (state i whose
 //   equation is exactly state j gives (i, j); in a [step] model the equation
 //   i + dt * j or i + j * dt), Params (defaults printed so that they read

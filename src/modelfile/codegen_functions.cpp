@@ -72,7 +72,7 @@ class Body {
       case NameRef::kLet:
         return LocalName(m_.lets[n.index].name);
       case NameRef::kInput:
-        return "u";
+        return m_.inputs.size() > 1 ? "u(" + std::to_string(n.index) + ")" : "u";
       case NameRef::kTime:
         return "t";
       case NameRef::kStepLength:
@@ -107,6 +107,12 @@ class Body {
 
 std::string Param(bool used, const std::string& type, const std::string& name) {
   return type + (used ? name : "/*" + name + "*/");
+}
+
+// The input as the model's functions take it (InputOf, models/model.h).
+std::string InputType(const ModelFile& m) {
+  return m.inputs.size() > 1 ? "const Vec<double, " + std::to_string(m.inputs.size()) + ">& "
+                             : "double ";
 }
 
 // The lets that the equations need, directly or through other lets.
@@ -164,7 +170,7 @@ std::string DynamicsFunction(const ModelFile& m, int indent) {
                           Param(body.uses_t, "const T& ", "t") + ", " +
                           Param(body.uses_x(), "const " + vec + "& ", "x") + ", ";
   if (m.discrete) signature += Param(body.uses_dt, "double ", "dt") + ", ";
-  signature += Param(body.uses_u, "double ", "u") + ", " + Param(body.uses_p, "const P& ", "p");
+  signature += Param(body.uses_u, InputType(m), "u") + ", " + Param(body.uses_p, "const P& ", "p");
   return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + signature + ") {\n" +
          body.Text(indent + 2) + Spaces(indent) + "}\n";
 }
@@ -177,8 +183,10 @@ std::string EvalFunction(const ModelFile& m, const MeasurementDecl& meas, int in
     body.Add("z(" + std::to_string(i) + ") = " + body.TCode(meas.outputs[i].expr) + ";");
   body.Add("return z;");
   const std::string x_type = "const Vec<T, " + std::to_string(m.states.size()) + ">& ";
+  // Eval(x, u, p) when an output uses an input (a measurement h(x, u)).
+  const std::string u = body.uses_u ? InputType(m) + "u, " : "";
   return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + "static " + vec +
-         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " +
+         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " + u +
          Param(body.uses_p, "const P& ", "p") + ") {\n" + body.Text(indent + 2) + Spaces(indent) +
          "}\n";
 }
@@ -189,22 +197,24 @@ std::string InvariantFunctions(const ModelFile& m, int indent) {
   bool uses_p = false, uses_u = false;
   for (const InvariantDecl& inv : m.invariants) {
     for (const std::string& name : inv.zero_when) {
-      const bool input = m.input && name == *m.input;
-      std::string member;
+      std::string member, input;
       for (const ParamDecl& p : m.params)
         if (p.name == name) member = "p." + MemberName(p.name);
-      const std::string condition = (input ? "u" : member) + " == 0.0";
+      for (size_t i = 0; i < m.inputs.size(); ++i)
+        if (m.inputs[i].name == name)
+          input = m.inputs.size() > 1 ? "u(" + std::to_string(i) + ")" : "u";
+      const std::string condition = (input.empty() ? member : input) + " == 0.0";
       bool seen = false;
       for (const std::string& c : conditions) seen |= c == condition;
       if (seen) continue;
       conditions.push_back(condition);
-      (input ? uses_u : uses_p) = true;
+      (input.empty() ? uses_p : uses_u) = true;
     }
   }
   std::string hold = m.invariants.empty() ? "false" : conditions.empty() ? "true" : "";
   for (const std::string& c : conditions) hold += (hold.empty() ? "" : " && ") + c;
   std::string out = Spaces(indent) + "static bool InvariantsHold(" +
-                    Param(uses_p, "const Params& ", "p") + ", " + Param(uses_u, "double ", "u") +
+                    Param(uses_p, "const Params& ", "p") + ", " + Param(uses_u, InputType(m), "u") +
                     ") { return " + hold + "; }\n";
 
   const std::string k = std::to_string(m.invariants.size());

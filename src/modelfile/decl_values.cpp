@@ -109,6 +109,15 @@ void ReadStateValue(const IniEntry& entry, StateDecl* state, std::vector<Diagnos
   state->unit = unit ? *unit : (state->angle ? "rad" : "");
 }
 
+std::string ReadInputValue(const IniEntry& entry, InputDecl* input,
+                           std::vector<Diagnostic>* diagnostics) {
+  std::string_view head;
+  std::optional<std::string> unit;
+  if (!SplitUnit(entry, &head, &unit, diagnostics)) return "";
+  input->unit = unit.value_or("");
+  return std::string(head);
+}
+
 void ReadParamValue(const IniEntry& entry, ParamDecl* param, std::vector<Diagnostic>* diagnostics) {
   std::string_view head;
   std::optional<std::string> unit;

@@ -26,6 +26,11 @@ void ReadStateValue(const IniEntry& entry, StateDecl* state, std::vector<Diagnos
 // constraint, and a constraint other than '> 0' / '>= 0'.
 void ReadParamValue(const IniEntry& entry, ParamDecl* param, std::vector<Diagnostic>* diagnostics);
 
+// Sets input->unit from one item "name [unit]" of an input list; returns the
+// name part (trimmed; the caller checks it is one valid name).
+std::string ReadInputValue(const IniEntry& entry, InputDecl* input,
+                           std::vector<Diagnostic>* diagnostics);
+
 }  // namespace estlab::modelfile
 
 #endif  // ESTLAB_MODELFILE_DECL_VALUES_H_

@@ -27,7 +27,7 @@ const char* KindName(NameRef ref) {
     case NameRef::kLet:
       return "a [let] value";
     case NameRef::kInput:
-      return "the input";
+      return "an input";
     default:
       return "a name";
   }
@@ -100,7 +100,8 @@ class Checker {
       all.push_back({m_.params[i].name, {NameRef::kParam, int(i), m_.params[i].pos}});
     for (size_t i = 0; i < m_.lets.size(); ++i)
       all.push_back({m_.lets[i].name, {NameRef::kLet, int(i), m_.lets[i].pos}});
-    if (m_.input) all.push_back({*m_.input, {NameRef::kInput, 0, *raw_.input_pos}});
+    for (size_t i = 0; i < m_.inputs.size(); ++i)
+      all.push_back({m_.inputs[i].name, {NameRef::kInput, int(i), m_.inputs[i].pos}});
     std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
       return PosLess(a.second.pos, b.second.pos);
     });
@@ -198,9 +199,13 @@ class Checker {
   }
 
   void ResolveDeclared(Expr* n, const Decl& d, Context context, int visible_lets) {
-    if (IsObservation(context) && (d.ref == NameRef::kInput || d.ref == NameRef::kLet)) {
+    if ((IsObservation(context) && d.ref == NameRef::kLet) ||
+        (context == Context::kInvariant && d.ref == NameRef::kInput)) {
       Report(n->pos, std::string(ContextWord(context)) + " cannot use " + KindName(d.ref) + " " +
-                         Quoted(n->text) + " (they see only states, parameters and numbers)");
+                         Quoted(n->text) +
+                         (context == Context::kMeasurement
+                              ? " (they see states, parameters, inputs and numbers)"
+                              : " (they see only states, parameters and numbers)"));
       return;
     }
     if (context == Context::kLet && d.ref == NameRef::kLet && d.index >= visible_lets) {
@@ -223,14 +228,15 @@ class Checker {
     std::vector<std::string> candidates;
     for (const auto& [name, d] : decls_) {
       if (suggestions_ >= kMaxSuggestions) break;
-      const bool observation_ok = d.ref == NameRef::kState || d.ref == NameRef::kParam;
+      const bool observation_ok = d.ref == NameRef::kState || d.ref == NameRef::kParam ||
+                                  (context == Context::kMeasurement && d.ref == NameRef::kInput);
       const bool let_ok = d.ref != NameRef::kLet || d.index < visible_lets;
       if (IsObservation(context) ? observation_ok : let_ok) candidates.push_back(name);
     }
     ++suggestions_;
     const std::string suggestion = DidYouMean(n.text, candidates);
     std::string message = "unknown name " + Quoted(n.text) + suggestion;
-    if (suggestion.empty() && !m_.input && !IsObservation(context)) {
+    if (suggestion.empty() && m_.inputs.empty() && context != Context::kInvariant) {
       message += "; if " + Quoted(n.text) + " is the input, declare it with 'input = " + n.text +
                  "' in [model]";
     }
@@ -240,7 +246,7 @@ class Checker {
   void CheckZeroWhen() {
     std::vector<std::string> candidates;
     for (const ParamDecl& p : m_.params) candidates.push_back(p.name);
-    if (m_.input) candidates.push_back(*m_.input);
+    for (const InputDecl& input : m_.inputs) candidates.push_back(input.name);
     for (const NameUse& use : raw_.zero_when_uses) {
       const Decl* d = Find(use.name);
       if (d && (d->ref == NameRef::kParam || d->ref == NameRef::kInput)) continue;

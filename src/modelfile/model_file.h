@@ -6,7 +6,7 @@
 //   [model]
 //   name = compound-pendulum          # letters, digits, '_' and '-'
 //   description = rigid arm with joint friction, theta from upright
-//   input = u                         # optional; at most one scalar input
+//   input = u                         # optional: inputs, 'a [V], b' for several
 //   stiff = false                     # optional: true/false (yes/no, 1/0)
 //
 //   [states]
@@ -36,8 +36,9 @@
 // expression.h. Names available
 //   in [let]:               states, parameters, the input, t, earlier lets (+ dt in [step] models)
 //   in [rhs] / [step]:      the same and every let
-//   in measurements and     states, parameters, numbers and pi only (their Eval(x, p) and
-//   invariants:             Invariants(x, p) see no input, time or lets)
+//   in measurements:        states, parameters, the inputs, numbers and pi (Eval(x, p), or
+//                           Eval(x, u, p) when an output uses an input; no time or lets)
+//   in invariants:          states, parameters, numbers and pi only (Invariants(x, p))
 //   in parameter defaults:  numbers, pi and functions (e.g. 0.15 * 0.17^2 / 12)
 // Sections may come in any order. Several [invariant GROUP] sections may be
 // given; the model's invariants hold when every name listed in any group's
@@ -63,6 +64,12 @@ struct StateDecl {
   std::string name;
   bool angle = false;
   std::string unit;  // "rad" for an angle written without [unit]
+  SourcePos pos;
+};
+
+struct InputDecl {
+  std::string name;
+  std::string unit;  // "" = none given
   SourcePos pos;
 };
 
@@ -110,7 +117,7 @@ struct ModelFile {
   std::string path;
   std::string name;
   std::string description;
-  std::optional<std::string> input;
+  std::vector<InputDecl> inputs;  // in declaration order: u(0), u(1), ...
   bool stiff = false;
   bool discrete = false;  // [step] instead of [rhs]
   std::vector<StateDecl> states;

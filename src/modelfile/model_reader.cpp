@@ -1,5 +1,6 @@
 #include "src/modelfile/model_reader.h"
 
+#include <algorithm>
 #include <map>
 #include <utility>
 
@@ -30,23 +31,6 @@ std::pair<size_t, std::string> TrimmedPiece(const std::string& text, size_t begi
   while (begin < end && (text[begin] == ' ' || text[begin] == '\t')) ++begin;
   while (end > begin && (text[end - 1] == ' ' || text[end - 1] == '\t')) --end;
   return {begin, text.substr(begin, end - begin)};
-}
-
-// Words of `text` separated by blanks and commas, with their offsets.
-std::vector<std::pair<std::string, size_t>> SplitWords(const std::string& text) {
-  std::vector<std::pair<std::string, size_t>> words;
-  size_t i = 0;
-  while (i < text.size()) {
-    if (text[i] == ' ' || text[i] == '\t' || text[i] == ',') {
-      ++i;
-      continue;
-    }
-    const size_t end = text.find_first_of(" \t,", i);
-    const size_t stop = end == std::string::npos ? text.size() : end;
-    words.push_back({text.substr(i, stop - i), i});
-    i = stop;
-  }
-  return words;
 }
 
 class SectionReader {
@@ -120,7 +104,7 @@ class SectionReader {
     if (!inserted) {
       Report(e.key_pos,
              e.key == "input"
-                 ? "more than one input: a model has at most one scalar input"
+                 ? "a second 'input' line: list every input on one line, 'input = a [V], b'"
                  : "duplicate key " + Quoted(e.key) + " (first at " + LineRef(first->second) + ")");
       return;
     }
@@ -152,17 +136,30 @@ class SectionReader {
     }
   }
 
+  // input = NAME [unit], NAME [unit], ...: each item one name and an
+  // optional unit.
   void ReadInput(const IniEntry& e) {
-    const auto words = SplitWords(e.value);
-    if (words.empty()) return Report(e.value_pos, "empty input name");
-    if (words.size() > 1) {
-      Report(Offset(e.value_pos, words[1].second),
-             "more than one input: a model has at most one scalar input");
+    size_t begin = 0;
+    while (begin <= e.value.size()) {
+      const size_t comma = std::min(e.value.find(',', begin), e.value.size());
+      const auto [offset, item] = TrimmedPiece(e.value, begin, comma);
+      const SourcePos pos = Offset(e.value_pos, offset);
+      if (item.empty()) {
+        Report(pos, e.value.empty() ? "empty input name" : "empty item in the input list");
+      } else {
+        IniEntry piece = e;
+        piece.value = item;
+        piece.value_pos = pos;
+        InputDecl input{"", "", pos};
+        input.name = ReadInputValue(piece, &input, diagnostics_);
+        if (input.name.find_first_of(" \t") != std::string::npos) {
+          Report(pos, "one name per input, separated by commas: " + Quoted(input.name));
+        } else if (!input.name.empty() && CheckName(input.name, pos)) {
+          raw_.model.inputs.push_back(input);
+        }
+      }
+      begin = comma + 1;
     }
-    const SourcePos pos = Offset(e.value_pos, words[0].second);
-    if (!CheckName(words[0].first, pos)) return;
-    raw_.model.input = words[0].first;
-    raw_.input_pos = pos;
   }
 
   void ReadStiff(const IniEntry& e) {

@@ -37,7 +37,6 @@ struct RawModel {
   ModelFile model;                       // all but model.rhs and model.discrete
   bool has_name = false;                 // a 'name' key, valid or not
   bool has_measurement_section = false;  // a [measurement ...] header, valid or not
-  std::optional<SourcePos> input_pos;
   std::optional<SourcePos> model_section, states_section, rhs_section, step_section;
   std::vector<RawEquation> rhs_equations, step_equations;
   std::vector<NameUse> zero_when_uses;  // the items of every conserved-if-zero list

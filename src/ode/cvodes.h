@@ -252,7 +252,7 @@ class CvodesTransition final : public Transition<Model> {
   Jacobian EvalJacobian(double t, const State& x) {
     ++this->stats_.jacobian_evals;
     Jacobian J;
-    const double u = this->input_;
+    const InputOf<Model>& u = this->input_;
     const Params& p = this->params_;
     ValueAndJacobian<kN, kN>(
         [&](const auto& xj) {
@@ -316,7 +316,7 @@ class CvodesTransition final : public Transition<Model> {
   double last_t1_ = 0.0;
   double last_h_ = 0.0;
   double last_h0_ = 0.0;
-  double last_input_ = 0.0;
+  InputOf<Model> last_input_ = InputFrom<Model>(nullptr);
   State last_x_ = State::Zero();
   std::string callback_error_;
 };

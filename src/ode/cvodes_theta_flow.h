@@ -102,7 +102,8 @@ class CvodesThetaFlow {
   // ParamsT<J> when physical parameters are differentiated); F = dx(t1)/dx(t0)
   // when F is not null.
   template <class P>
-  StateJ Propagate(const StateJ& x, double t0, double t1, double u, const P& p, JacobianJ* F) {
+  StateJ Propagate(const StateJ& x, double t0, double t1, const InputOf<Model>& u, const P& p,
+                   JacobianJ* F) {
     with_jacobian_ = F != nullptr;
     Memory& m = memory_[with_jacobian_ ? 1 : 0];
     if (m.mem == nullptr) Create(&m, with_jacobian_ ? kN + kN * kN : kN);
@@ -218,7 +219,7 @@ class CvodesThetaFlow {
   template <class P>
   static int RhsFor(CvodesThetaFlow* self, double t, N_Vector y, N_Vector ydot) {
     const typename Model::Params p = Values(*static_cast<const P*>(self->params_));
-    const double u = self->input_;
+    const InputOf<Model>& u = self->input_;
     Vec<double, kN> x;
     for (int k = 0; k < kN; ++k) x(k) = NV_Ith_S(y, k);
     if (!self->with_jacobian_) {
@@ -247,7 +248,7 @@ class CvodesThetaFlow {
   static int SensRhsFor(CvodesThetaFlow* self, double t, N_Vector y, N_Vector* yS,
                         N_Vector* ySdot) {
     const P& p = *static_cast<const P*>(self->params_);
-    const double u = self->input_;
+    const InputOf<Model>& u = self->input_;
     auto jet = [&](int k) {
       J v(NV_Ith_S(y, k));
       for (int i = 0; i < C; ++i) v.v(i) = NV_Ith_S(yS[i], k);
@@ -320,7 +321,7 @@ class CvodesThetaFlow {
   // The current call's inputs, read by the callbacks.
   bool with_jacobian_ = false;
   const void* params_ = nullptr;
-  double input_ = 0.0;
+  InputOf<Model> input_ = InputFrom<Model>(nullptr);
   int (*rhs_)(CvodesThetaFlow*, double, N_Vector, N_Vector) = nullptr;
   int (*sens_rhs_)(CvodesThetaFlow*, double, N_Vector, N_Vector*, N_Vector*) = nullptr;
   std::string callback_error_;

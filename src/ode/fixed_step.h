@@ -20,7 +20,7 @@ namespace estlab {
 // (models/model_params.h).
 template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kStateDim>& x, double t,
-                                   double h, double u, const Prm& p) {
+                                   double h, const InputOf<Model>& u, const Prm& p) {
   using State = Vec<T, Model::kStateDim>;
   const T tt(t);
   if constexpr (kDiscreteTime<Model>) {
@@ -67,7 +67,8 @@ inline int RhsEvalsPerStep(Integrator scheme) {
 // `substeps` equal steps from t0 to t1.
 template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::kStateDim>& x0,
-                                        double t0, double t1, int substeps, double u,
+                                        double t0, double t1, int substeps,
+                                        const InputOf<Model>& u,
                                         const Prm& p) {
   const double h = (t1 - t0) / substeps;
   Vec<T, Model::kStateDim> x = x0;

@@ -94,14 +94,15 @@ class Transition {
     StepPoints(points, t0, t1, out);
   }
 
-  void SetInput(double u) { input_ = u; }
-  double input() const { return input_; }
+  using Input = InputOf<Model>;  // double for models with at most one input
+  void SetInput(const Input& u) { input_ = u; }
+  const Input& input() const { return input_; }
   const Params& params() const { return params_; }
   const TransitionStats& stats() const { return stats_; }
 
  protected:
   Params params_;
-  double input_ = 0.0;
+  Input input_ = InputFrom<Model>(nullptr);
   TransitionStats stats_;
 };
 

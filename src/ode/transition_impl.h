@@ -36,7 +36,7 @@ class FixedStepTransition final : public Transition<Model> {
   }
   State StepWithJacobian(const State& x, double t0, double t1, Jacobian* F) override {
     Count(true);
-    const double u = this->input_;
+    const InputOf<Model>& u = this->input_;
     const Params& p = this->params_;
     return ValueAndJacobian<kN, kN>(
         [&](const auto& xj) {
@@ -49,7 +49,7 @@ class FixedStepTransition final : public Transition<Model> {
   void StepPoints(const Points& points, double t0, double t1, Points* out) override {
     const Eigen::Index count = points.cols();
     CountPoints(count);
-    const double u = this->input_;
+    const InputOf<Model>& u = this->input_;
     const Params& p = this->params_;
     for (Eigen::Index i = 0; i < count; ++i)
       out->col(i) =

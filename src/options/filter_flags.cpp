@@ -249,30 +249,47 @@ std::string Where(const std::string& path, long line, const Source& s) {
 
 namespace {
 
+// The input columns of `table`, one per model input, matched by name
+// (--column maps others; a model's single input may also be a column "u").
+// Empty when the table has none of them; an error naming the missing ones
+// when it has some but not all, or none and the run holds no constant input.
+std::vector<Source> FindInputColumns(const CsvTable& table, const std::string& path,
+                                     const ModelEntry& model, const std::vector<ColumnMap>& columns,
+                                     bool constant_input) {
+  std::vector<Source> found;
+  std::vector<std::string> missing;
+  for (const std::string& name : model.inputs) {
+    Source uc = FindSource(table, columns, name);
+    const bool u_is_a_state =
+        std::find(model.states.begin(), model.states.end(), "u") != model.states.end();
+    if (uc.column < 0 && model.inputs.size() == 1 && name != "u" && !u_is_a_state)
+      uc = FindSource(table, columns, "u");
+    if (uc.column < 0) missing.push_back(name);
+    found.push_back(uc);
+  }
+  if (missing.empty()) return found;
+  if (missing.size() == model.inputs.size() && constant_input) return {};
+  std::string names;
+  for (const std::string& name : missing) names += (names.empty() ? "'" : ", '") + name + "'";
+  throw InputError(path + ": no input column " + names + " for " +
+                   (model.inputs.size() == 1 ? "the input" : "the inputs") + " of model '" +
+                   model.name + "' (map another column with --column " + missing[0] + "=NAME" +
+                   (missing.size() == model.inputs.size()
+                        ? ", or hold the input constant with --input)"
+                        : "; every input needs its column)"));
+}
+
 // The time and input columns of every row of `table` into *data (t, lines,
-// has_input, u). A model with an input needs its column unless
-// constant_input says the run holds one value; a missing or non-finite input
-// and time going backwards are errors naming FILE:LINE and the column.
+// nu, u). A model with inputs needs their columns unless constant_input says
+// the run holds one value; a missing or non-finite input and time going
+// backwards are errors naming FILE:LINE and the column.
 void ReadTimesAndInputs(const CsvTable& table, const std::string& path, const ModelEntry& model,
                         const std::vector<ColumnMap>& columns, bool constant_input,
                         FilterData* data) {
   const Source tc = FindSource(table, columns, "t");
   if (tc.column < 0) throw InputError(path + ": no '" + tc.name + "' (time) column");
-  Source uc;
-  if (model.has_input) {
-    uc = FindSource(table, columns, model.input_name);
-    const bool u_is_a_state =
-        std::find(model.states.begin(), model.states.end(), "u") != model.states.end();
-    if (uc.column < 0 && model.input_name != "u" && !u_is_a_state)
-      uc = FindSource(table, columns, "u");
-    if (uc.column < 0) uc.name = model.input_name;
-  }
-  if (model.has_input && uc.column < 0 && !constant_input)
-    throw InputError(path + ": no input column '" + uc.name + "' for the input of model '" +
-                     model.name + "' (map another column with --column " + model.input_name +
-                     "=NAME, or "
-                     "hold the input constant with --input)");
-  data->has_input = uc.column >= 0;
+  const std::vector<Source> inputs = FindInputColumns(table, path, model, columns, constant_input);
+  data->nu = int(inputs.size());
   for (size_t k = 0; k < table.rows.size(); ++k) {
     const auto& row = table.rows[k];
     const long line = table.line_numbers[k];
@@ -283,7 +300,7 @@ void ReadTimesAndInputs(const CsvTable& table, const std::string& path, const Mo
                        " after " + FormatNumber(data->t.back()) + ")");
     data->t.push_back(t);
     data->lines.push_back(line);
-    if (data->has_input) {
+    for (const Source& uc : inputs) {
       const double u = uc.Read(row);
       if (std::isnan(row[uc.column])) throw InputError(Where(path, line, uc) + "missing input");
       if (!std::isfinite(u))

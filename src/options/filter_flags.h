@@ -72,7 +72,7 @@ FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
 bool ConstantInputGiven(const boost::program_options::variables_map& vm);
 
 // The times and (for a model with an input) the input column of a CSV, as
-// `estlab simulate --data` replays them: t, lines, has_input and u of the
+// `estlab simulate --data` replays them: t, lines, nu and u of the
 // result are set, m = 0. Errors as LoadFilterData's.
 FilterData LoadInputRecord(const std::string& path, const ModelEntry& model,
                            const std::vector<ColumnMap>& columns);

@@ -55,7 +55,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"resample", "systematic", "pf: multinomial | systematic | stratified | residual"},
       {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
       {"seed", "1", "random seed (pf: the particles; tune: the multi-start points)", K::kValue, false, true},
-      {"input", "0", "constant input, for data without the input's column (else that column, held between samples)", K::kValue, false, true},
+      {"input", "0", "constant input, for data without the input's column (else that column, held between samples); a model with several inputs takes one value each, comma-separated", K::kValue, false, true},
       {"column", nullptr, "map a column: ours=[a*]theirs[+-b] (ours = a theirs + b; a, b numbers or pi), e.g. z_theta=angle_rad, theta=angle-pi, theta=0.0174533*angle_deg", K::kRepeatable, false, true},
       {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
   };
@@ -253,6 +253,23 @@ KindSettings ReadKindSettings(const Reader& r, const std::string& filter_name) {
   return k;
 }
 
+// The constant input: one value per model input (a single 0 for any model
+// means none was asked; empty then).
+std::vector<double> ReadConstantInput(const Reader& r, const ModelEntry& model) {
+  const std::vector<double> values =
+      ForKey("input", [&] { return ParseList(r.Text("input"), "input"); });
+  const bool zero = values.size() == 1 && values[0] == 0.0;
+  if (!model.has_input()) {
+    if (!zero) throw KeyError("input", "model '" + model.name + "' has no input");
+    return {};
+  }
+  if (zero) return {};
+  if (values.size() != model.inputs.size())
+    throw KeyError("input", std::to_string(values.size()) + " value(s) for model '" + model.name +
+                                "' with " + std::to_string(model.inputs.size()) + " inputs");
+  return values;
+}
+
 // spec->filter from the settings: the chosen kind's options (filter_kinds.h).
 void ReadFilterKind(const Reader& r, const ModelEntry& model, FilterSpec* spec) {
   const std::string name = r.Text("filter");
@@ -334,9 +351,7 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   const std::string p0_key = r.Given("p0") ? "p0" : "p0-diag";
   ForKey(p0_key, [&] { return cli::CheckCovariance(spec.p0, n, "P0", false), 0; });
   ReadNoise(r, settings.noise_prefix(), n, m, meas.name, &spec);
-  spec.input = r.Number("input");
-  if (spec.input != 0 && !model.has_input)
-    throw KeyError("input", "model '" + model.name + "' has no input");
+  spec.input = ReadConstantInput(r, model);
   spec.full_cov = r.Given("full-cov");
   ReadFilterKind(r, model, &spec);
   ReadAdapt(r, &spec.adapt);

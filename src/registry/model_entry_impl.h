@@ -40,7 +40,10 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
     e.measurements.push_back(d);
   });
   for (const char* s : Model::kInvariantNames) e.invariants.push_back(s);
-  e.has_input = Model::kHasInput;
+  for (int i = 0; i < kInputDim<Model>; ++i) {
+    e.inputs.push_back(InputName<Model>(i));
+    e.input_units.push_back(InputUnit<Model>(i));
+  }
   e.stiff = Model::kStiff;
   e.discrete_time = kDiscreteTime<Model>;
   for (const auto& pair : Model::kPositionRatePairs) e.position_rate_pairs.push_back(pair);

@@ -411,8 +411,10 @@ ModelEntry DescribeModelFile(const std::string& path) {
     e.measurements.push_back(d);
   }
   for (const modelfile::InvariantDecl& inv : m.invariants) e.invariants.push_back(inv.name);
-  e.has_input = m.input.has_value();
-  if (m.input) e.input_name = *m.input;
+  for (const modelfile::InputDecl& input : m.inputs) {
+    e.inputs.push_back(input.name);
+    e.input_units.push_back(input.unit);
+  }
   e.stiff = m.stiff;
   e.discrete_time = m.discrete;
   return e;

@@ -50,10 +50,11 @@ struct ModelEntry {
   std::vector<ParamDesc> params;
   std::vector<MeasurementDesc> measurements;
   std::vector<std::string> invariants;
-  bool has_input = false;
-  // The input's data column: the model file's input name (built-in models:
-  // "u"); data may also name it "u".
-  std::string input_name = "u";
+  // The inputs (empty: none): their names, which are their data columns
+  // (a single input may also be read from a column "u"), and units.
+  std::vector<std::string> inputs;
+  std::vector<std::string> input_units;
+  bool has_input() const { return !inputs.empty(); }
   bool stiff = false;
   bool discrete_time = false;  // a step map x(t + dt) (Integrator::kDiscrete only)
 

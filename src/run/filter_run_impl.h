@@ -305,7 +305,9 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   const typename Model::Params params = ParamsFromVector<Model>(spec.params);
   auto transition = MakeTransition<Model>(params, spec.transition);
   auto filter = MakeFilter<Model, Meas>(spec, params, transition.get());
-  filter->SetInput(spec.input);  // the transition's, or the KF's own
+  if (const std::string why = CheckInputWidths(spec, data, kInputDim<Model>); !why.empty())
+    throw InputError(why);
+  filter->SetInput(InputFrom<Model>(InputAtRow(spec, data, 0)));  // the transition's, or the KF's
 
   std::optional<NoiseAdapter<N, M>> adapter;
   if (!spec.adapt.rule.empty()) adapter.emplace(spec.adapt);
@@ -342,8 +344,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
                 std::to_string(k < data.lines.size() ? data.lines[k] : 0) + "): " + what;
     return false;
   };
-  auto predict = [&](size_t k, double t0, double t1, double u) {
-    filter->SetInput(u);
+  auto predict = [&](size_t k, double t0, double t1, const double* u) {
+    filter->SetInput(InputFrom<Model>(u));
     if (spec.q_white_accel && !q_adapted) Q = WhiteAccelQ<Model>(spec.qc, t1 - t0);
     std::string why;
     if (smoother && !smoother->BeforePredict(t0, t1, Q, &why)) return fail(k, why);
@@ -354,8 +356,9 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
     if (smoother && !smoother->AfterPredict(&why)) return fail(k, why);
     return true;
   };
-  auto row = [&](size_t k, const Vec<double, M>* z) {
+  auto row = [&](size_t k, const Vec<double, M>* z, const double* u) {
     const StateCov p_pred = filter->cov();
+    filter->SetInput(InputFrom<Model>(u));  // u_k: seen by h(x, u), held over the next step
     RowRecord<N, M> rec;
     rec.t = data.t[k];
     rec.have_z = z != nullptr;

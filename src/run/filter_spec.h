@@ -42,7 +42,9 @@ struct FilterSpec {
 
   AdaptSpec adapt;  // sigma-point filters only
 
-  double input = 0.0;  // constant input when the data has no 'u' column
+  // The constant input (one value per model input) when the data have no
+  // input columns; empty = 0 for every input.
+  std::vector<double> input;
   bool has_t0 = false;
   double t0 = 0.0;
   bool full_cov = false;  // write every covariance entry, not just the diagonal
@@ -65,8 +67,8 @@ struct FilterData {
   std::vector<double> z;  // rows x m, NaN = missing (no update)
   bool has_truth = false;
   std::vector<double> truth;  // rows x n
-  bool has_input = false;
-  std::vector<double> u;
+  int nu = 0;              // input columns (0: none, the spec's constant input)
+  std::vector<double> u;  // rows x nu: u_k held over [t_k, t_k+1)
 };
 
 struct FilterSummary {

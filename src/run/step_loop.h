@@ -3,18 +3,22 @@
 // (adaptive/likelihood.h) all step through a dataset with it.
 //
 // For each row k at time t_k (t_{-1} = spec.t0 when given, else t_0):
-//   if t_k > t_{k-1}: predict from t_{k-1} to t_k with the input u held over
-//                     the step (the data's u column at row k-1, else
-//                     spec.input)
+//   if t_k > t_{k-1}: predict from t_{k-1} to t_k with the input u_{k-1}
+//                     held over the step (zero-order hold; row 0's input
+//                     before the first row)
 //   then visit the row with z_k, or with no measurement when any component
-//   of z_k is missing (NaN): no update then.
+//   of z_k is missing (NaN): no update then; with the input u_k, which a
+//   measurement h(x, u) sees.
+// An input is a pointer to nu values (InputAtRow: the data's input columns,
+// else spec.input), or null for the zero input; InputFrom<Model>(u)
+// (models/model.h) makes it the model's input.
 // Either callable stops the loop by returning false.
 //
 // Usage:
 //   const bool completed = ForEachStep<M>(
 //       spec, data,
-//       [&](size_t k, double t0, double t1, double u) { return Predict(...); },
-//       [&](size_t k, const Vec<double, M>* z) { return z ? Update(*z) : true; });
+//       [&](size_t k, double t0, double t1, const double* u) { return Predict(...); },
+//       [&](size_t k, const Vec<double, M>* z, const double* u) { return z ? Update(*z) : true; });
 #ifndef ESTLAB_RUN_STEP_LOOP_H_
 #define ESTLAB_RUN_STEP_LOOP_H_
 
@@ -28,6 +32,26 @@
 
 namespace estlab {
 
+// Row k's input: its nu input cells, else spec.input (null when empty).
+inline const double* InputAtRow(const FilterSpec& spec, const FilterData& data, size_t k) {
+  if (data.nu > 0) return (k + 1) * size_t(data.nu) <= data.u.size() ? &data.u[k * size_t(data.nu)] : nullptr;
+  return spec.input.empty() ? nullptr : spec.input.data();
+}
+
+// "" when the data's input columns and spec.input fit a model with `inputs`
+// inputs (each either absent or of that width), else what does not.
+inline std::string CheckInputWidths(const FilterSpec& spec, const FilterData& data, int inputs) {
+  if (data.nu != 0 && data.nu != inputs)
+    return data.path + ": " + std::to_string(data.nu) + " input columns for a model with " +
+           std::to_string(inputs) + " inputs";
+  if (data.nu != 0 && data.u.size() != data.t.size() * size_t(data.nu))
+    return data.path + ": the input columns do not cover every row";
+  if (!spec.input.empty() && int(spec.input.size()) != inputs)
+    return "input: " + std::to_string(spec.input.size()) + " values for a model with " +
+           std::to_string(inputs) + " inputs";
+  return "";
+}
+
 template <int M, class PredictFn, class RowFn>
 bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& predict, RowFn&& row) {
   const size_t rows = data.t.size();
@@ -35,8 +59,7 @@ bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& pre
   for (size_t k = 0; k < rows; ++k) {
     const double t = data.t[k];
     if (t > t_prev) {
-      const double u = data.has_input ? data.u[k > 0 ? k - 1 : 0] : spec.input;
-      if (!predict(k, t_prev, t, u)) return false;
+      if (!predict(k, t_prev, t, InputAtRow(spec, data, k > 0 ? k - 1 : 0))) return false;
     }
     t_prev = t;
     Vec<double, M> z;
@@ -45,7 +68,7 @@ bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& pre
       z(j) = data.z[k * M + j];
       if (!std::isfinite(z(j))) have_z = false;
     }
-    if (!row(k, have_z ? &z : nullptr)) return false;
+    if (!row(k, have_z ? &z : nullptr, InputAtRow(spec, data, k))) return false;
   }
   return true;
 }

@@ -19,18 +19,21 @@ struct SimulationSpec {
   double t_end = 10.0;
   double dt = 0.01;
   TransitionOptions transition;
-  double input = 0.0;  // constant input, when `inputs` is empty
+  // The constant input, one value per model input (empty = 0 for each), when
+  // `inputs` is empty.
+  std::vector<double> input;
   // A recorded schedule (`estlab simulate --data`, output error, free
   // simulation): when not empty, rows are written at these times (the first
   // is x0's time) instead of k dt, and t_end and dt are not used. `inputs`
-  // (empty, or one per time) is held over [times[k], times[k+1]) (zero-order
+  // (empty, or one row of nu values per time, row-major) is held over
+  // [times[k], times[k+1]) (zero-order
   // hold: a model's input is piecewise constant between samples, and CVODES
   // restarts at every sample where it changes).
   std::vector<double> times;
   std::vector<double> inputs;
-  // When not empty, a column of this name after the states (the input held
-  // from each row on).
-  std::string input_column;
+  // When not empty, columns of these names (one per model input) after the
+  // states: the input held from each row on.
+  std::vector<std::string> input_columns;
   // Adds the noise-free outputs y_<output> after the z_ columns.
   bool noise_free_outputs = false;
   std::vector<double> process_noise_var;  // empty = none, else one per state

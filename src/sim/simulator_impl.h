@@ -35,9 +35,14 @@ inline std::vector<double> OutputTimes(const SimulationSpec& spec) {
   return times;
 }
 
-// The input held over [times[k], times[k+1]).
-inline double InputAt(const SimulationSpec& spec, size_t k) {
-  return spec.inputs.empty() ? spec.input : spec.inputs[std::min(k, spec.inputs.size() - 1)];
+// The nu input values held over [times[k], times[k+1]) (null: the zero
+// input).
+inline const double* InputAt(const SimulationSpec& spec, size_t k, int nu) {
+  if (nu > 0 && spec.inputs.size() >= size_t(nu)) {
+    const size_t rows = spec.inputs.size() / size_t(nu);
+    return &spec.inputs[std::min(k, rows - 1) * size_t(nu)];
+  }
+  return spec.input.size() == size_t(nu) && nu > 0 ? spec.input.data() : nullptr;
 }
 
 // Process noise w = L n with L L^T = Q (diagonal variances or a full PSD
@@ -71,17 +76,24 @@ SimulationResult Simulate(const SimulationSpec& spec) {
   SimulationResult result;
   result.columns.push_back("t");
   for (const char* s : Model::kStateNames) result.columns.push_back(s);
-  if (!spec.input_column.empty()) result.columns.push_back(spec.input_column);
+  for (const std::string& name : spec.input_columns) result.columns.push_back(name);
+  constexpr int nu = kInputDim<Model>;
+  if (!spec.input.empty() && spec.input.size() != size_t(nu))
+    throw InputError("input: " + std::to_string(spec.input.size()) + " values for model " +
+                     Model::kName + " with " + std::to_string(nu) + " inputs");
+  if (nu == 0 ? !spec.inputs.empty() : spec.inputs.size() % size_t(nu) != 0)
+    throw InputError("the recorded inputs do not come in rows of " + std::to_string(nu));
 
   // Type-erased measurement.
-  std::vector<double> (*measure)(const State&, const typename Model::Params&) = nullptr;
+  std::vector<double> (*measure)(const State&, const InputOf<Model>&,
+                                 const typename Model::Params&) = nullptr;
   VisitMeasurement<Model>(spec.measurement, [&](auto m) {
     using Meas = decltype(m);
     for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("z_") + o);
     if (spec.noise_free_outputs)
       for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("y_") + o);
-    measure = [](const State& x, const typename Model::Params& p) {
-      const Vec<double, Meas::kDim> z = Meas::template Eval<double>(x, p);
+    measure = [](const State& x, const InputOf<Model>& u, const typename Model::Params& p) {
+      const Vec<double, Meas::kDim> z = EvalMeasurement<Model, Meas, double>(x, u, p);
       return std::vector<double>(z.data(), z.data() + Meas::kDim);
     };
   });
@@ -91,9 +103,11 @@ SimulationResult Simulate(const SimulationSpec& spec) {
     std::vector<double> row;
     row.push_back(times[k]);
     for (int i = 0; i < N; ++i) row.push_back(x(i));
-    if (!spec.input_column.empty()) row.push_back(InputAt(spec, k));
+    const InputOf<Model> u = InputFrom<Model>(InputAt(spec, k, nu));
+    if (!spec.input_columns.empty())
+      for (int i = 0; i < nu; ++i) row.push_back(InputComponent<Model>(u, i));
     if (measure != nullptr) {
-      const std::vector<double> y = measure(x, params);
+      const std::vector<double> y = measure(x, u, params);
       for (size_t j = 0; j < y.size(); ++j) {
         double z = y[j];
         if (!spec.meas_noise_var.empty()) z += std::sqrt(spec.meas_noise_var[j]) * rng.Normal();
@@ -106,10 +120,11 @@ SimulationResult Simulate(const SimulationSpec& spec) {
 
   Mat<N, N> noise_factor;
   const bool has_process_noise = ProcessNoiseFactor<N>(spec, &noise_factor);
+  const InputOf<Model> u0 = InputFrom<Model>(InputAt(spec, 0, nu));
   const bool track_invariants = Model::kInvariantNames.size() > 0 && spec.inputs.empty() &&
-                                Model::InvariantsHold(params, spec.input) && !has_process_noise;
+                                Model::InvariantsHold(params, u0) && !has_process_noise;
   auto transition = MakeTransition<Model>(params, spec.transition);
-  transition->SetInput(spec.input);
+  transition->SetInput(u0);
 
   State x = ToVec<N>(spec.x0);
   const auto inv0 = Model::Invariants(x, params);
@@ -120,7 +135,7 @@ SimulationResult Simulate(const SimulationSpec& spec) {
   for (size_t k = 0; k + 1 < times.size(); ++k) {
     const double t0 = times[k], t1 = times[k + 1];
     try {
-      transition->SetInput(InputAt(spec, k));
+      transition->SetInput(InputFrom<Model>(InputAt(spec, k, nu)));
       if (t1 > t0) x = transition->Step(x, t0, t1);
     } catch (const NumericalError& e) {
       result.ok = false;

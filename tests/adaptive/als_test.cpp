@@ -34,7 +34,7 @@ struct Odelson {
   static constexpr const char* kName = "odelson";
   static constexpr const char* kDescription = "Odelson et al. 2006, 3-state example (test model)";
   static constexpr int kStateDim = 3;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   static constexpr bool kDiscreteTime = true;
   static constexpr std::array<const char*, 3> kStateNames = {"x1", "x2", "x3"};

@@ -19,7 +19,7 @@ struct ConstantVelocity {
   static constexpr const char* kName = "constant-velocity";
   static constexpr const char* kDescription = "test model";
   static constexpr int kStateDim = 2 * Axes;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kAllNames = {"p1", "v1", "p2", "v2"};
   static constexpr std::array<const char*, kStateDim> kStateNames = [] {

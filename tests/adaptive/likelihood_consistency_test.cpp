@@ -65,9 +65,9 @@ FilterData Simulated(const ModelEntry& model, const MeasurementDesc& meas) {
     d.t.push_back(r.rows[k][0]);
     d.lines.push_back(long(k) + 2);
     for (int j = 0; j < m; ++j) d.z.push_back(r.rows[k][1 + n + j]);
-    if (model.has_input) d.u.push_back(0.3 * std::sin(3.0 * d.t.back()));
+    if (model.has_input()) d.u.push_back(0.3 * std::sin(3.0 * d.t.back()));
   }
-  d.has_input = model.has_input;
+  d.nu = model.has_input() ? 1 : 0;
   d.z[5 * m] = std::nan("");  // one missing measurement: no update there
   return d;
 }

@@ -439,7 +439,7 @@ TEST(TunerInput, RejectsBadInput) {
     s.filter = ParticleOptions{};
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
     s = spec;
-    s.filter = KfOptions{.operating_point = {0.0, 0.0, 0.0}};
+    s.filter = KfOptions{.operating_point = {0.0, 0.0, 0.0}, .operating_input = {}};
     EXPECT_THROW(TuneCv(s, options, CvData(50, 1)), InputError);
   }
   {  // through the registry: unknown measurement
@@ -545,7 +545,7 @@ TEST(TunerKf, NllEqualsTheDoubleKfAndTheGradientIsExact) {
   FilterSpec spec;
   spec.params = model.ResolveParams({});
   spec.measurement = "angle";
-  spec.filter = KfOptions{.operating_point = {0.0, 0.0}};
+  spec.filter = KfOptions{.operating_point = {0.0, 0.0}, .operating_input = {}};
   spec.x0 = {0.2, 0.0};
   spec.p0 = {0.01, 0.0, 0.0, 0.01};
   spec.q = Flat<2, 2>(WhiteAccel<P>(0.05, dt) + 1e-6 * Mat<2, 2>::Identity());

@@ -59,7 +59,7 @@ struct TwoTank {
   static constexpr const char* kName = "two-tank-test";
   static constexpr const char* kDescription = "two tanks in series, pump voltage u";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"h1", "h2"};
   static constexpr std::array<const char*, 2> kStateUnits = {"m", "m"};
@@ -123,7 +123,7 @@ struct Wells {
   static constexpr const char* kName = "wells-test";
   static constexpr const char* kDescription = "static states, quadratic in a";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"x1", "x2"};
   static constexpr std::array<const char*, 2> kStateUnits = {"", ""};
@@ -180,7 +180,7 @@ FilterData TankData(uint64_t seed, int steps, const TwoTank::Params& p, double d
   Rng rng(seed);
   FilterData d;
   d.m = 2;
-  d.has_input = true;
+  d.nu = 1;
   d.u = PumpVoltage(steps, &rng);
   Vec<double, 2> x(0.3, 0.3);
   for (int k = 0; k < steps; ++k) {

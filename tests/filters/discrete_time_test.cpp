@@ -28,7 +28,7 @@ struct DiscreteLinear {
   static constexpr const char* kName = "discrete-linear";
   static constexpr const char* kDescription = "linear step map (test model)";
   static constexpr int kStateDim = 3;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   static constexpr bool kDiscreteTime = true;
   static constexpr std::array<const char*, 3> kStateNames = {"x1", "x2", "x3"};
@@ -153,7 +153,7 @@ class DiscreteFilterTest : public ::testing::Test {
 TEST_F(DiscreteFilterTest, KfLinearisesTheMapExactly) {
   KfOptions elsewhere;  // an operating point and input away from the data: d and Gamma must cancel
   elsewhere.operating_point = {1.0, -2.0, 0.5};
-  elsewhere.operating_input = 0.7;
+  elsewhere.operating_input = {0.7};
   for (const KfOptions& o : {KfOptions{}, elsewhere}) {
     LinearizedKf<DL, DL::Pair> kf(params_, o);
     EXPECT_TRUE(

@@ -54,9 +54,9 @@ Deviation RunKfVersusZoh(const KfOptions& options, uint64_t seed) {
 }
 
 TEST(LinearizedKfTest, ZeroOrderHoldEqualsKalmanFilterWithMatrixExponential) {
-  KfOptions about_prior;            // x* = prior mean, u* = 0
-  KfOptions elsewhere;              // an arbitrary operating point and input: the affine
-  elsewhere.operating_input = 0.7;  // terms c and d must cancel exactly
+  KfOptions about_prior;              // x* = prior mean, u* = 0
+  KfOptions elsewhere;                // an arbitrary operating point and input: the affine
+  elsewhere.operating_input = {0.7};  // terms c and d must cancel exactly
   const Deviation d1 = RunKfVersusZoh<Osc, Osc::Position>(about_prior, 61);
   const Deviation d2 = RunKfVersusZoh<Osc, Osc::Mixed>(about_prior, 62);
   elsewhere.operating_point = {0.4, -1.3};

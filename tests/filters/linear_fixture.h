@@ -38,7 +38,7 @@ struct DampedOscillator {
   static constexpr const char* kName = "damped-oscillator";
   static constexpr const char* kDescription = "linear damped oscillator (test model)";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"x", "v"};
   static constexpr std::array<const char*, 2> kStateUnits = {"m", "m/s"};
@@ -105,7 +105,7 @@ struct CoupledOscillators {
   static constexpr const char* kName = "coupled-oscillators";
   static constexpr const char* kDescription = "two coupled linear oscillators (test model)";
   static constexpr int kStateDim = 4;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 4> kStateNames = {"x1", "v1", "x2", "v2"};
   static constexpr std::array<const char*, 4> kStateUnits = {"m", "m/s", "m", "m/s"};

@@ -90,7 +90,7 @@ TEST(Codegen, HeaderHasTheBuiltInForm) {
       "static constexpr const char* kName = \"features\";",
       "static constexpr const char* kDescription = \"quote \\\" and backslash \\\\ here\";",
       "static constexpr int kStateDim = 2;",
-      "static constexpr bool kHasInput = true;",
+      "static constexpr int kInputDim = 1;",
       "static constexpr bool kStiff = false;",
       "static constexpr bool kDiscreteTime = false;",
       "static constexpr std::array<const char*, 2> kStateNames = {\"x\", \"v\"};",

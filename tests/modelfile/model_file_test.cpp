@@ -100,7 +100,7 @@ std::vector<BadCase> BadCases() {
       {"state defined twice", WithLines({{7, "x ="}}),
        "t.model:7:1: ", "'x' is already defined as a state at line 5"},
       {"input named like a parameter", WithLines({{3, "input = k"}}),
-       "t.model:9:1: ", "'k' is already defined as the input at line 3"},
+       "t.model:9:1: ", "'k' is already defined as an input at line 3"},
       {"reserved t", WithLines({{7, "t ="}}), "t.model:7:1: ", "'t' is reserved (the time)"},
       {"reserved dt", WithLines({{10, "dt = 1"}}), "t.model:10:1: ", "'dt' is reserved"},
       {"reserved pi", WithLines({{10, "pi = 3"}}), "t.model:10:1: ", "'pi' is reserved"},
@@ -158,21 +158,21 @@ std::vector<BadCase> BadCases() {
        "t.model:13:205: ", "expression nested too deeply (more than 200 levels)"},
       {"line without '='", WithLines({{16, "x x"}}), "t.model:16:1: ", "expected 'name = value'"},
       {"missing key", WithLines({{16, " = x"}}), "t.model:16:2: ", "missing name before '='"},
-      {"two inputs in one line", WithLines({{3, "input = u, w"}}),
-       "t.model:3:12: ", "more than one input: a model has at most one scalar input"},
+      {"two names in one input item", WithLines({{3, "input = u w"}}),
+       "t.model:3:9: ", "one name per input, separated by commas: 'u w'"},
+      {"empty item in the input list", WithLines({{3, "input = u, , w"}}),
+       "t.model:3:12: ", "empty item in the input list"},
       {"two input lines", WithLines({{3, "input = u\ninput = w"}}),
-       "t.model:4:1: ", "more than one input"},
+       "t.model:4:1: ", "a second 'input' line: list every input on one line"},
       {"input used but not declared", WithLines({{13, "v = -k * x + u"}}), "t.model:13:14: ",
        "unknown name 'u'; if 'u' is the input, declare it with 'input = u' in [model]"},
-      {"measurement uses the input", WithLines({{3, "input = u"}, {16, "x = x + u"}}),
-       "t.model:16:9: ", "measurements cannot use the input 'u'"},
       {"measurement uses t", WithLines({{16, "x = x * t"}}),
        "t.model:16:9: ", "measurements cannot use the time 't'"},
       {"measurement uses a let", WithLines({{16, "x = r"}, {17, "[let]\nr = k * x"}}),
        "t.model:16:5: ", "measurements cannot use a [let] value 'r'"},
       {"invariant uses the input",
        WithLines({{3, "input = u"}, {17, "[invariant e]\nenergy = v * u"}}),
-       "t.model:18:14: ", "invariants cannot use the input 'u'"},
+       "t.model:18:14: ", "invariants cannot use an input 'u'"},
       {"unknown conserved-if-zero name",
        WithLines({{17, "[invariant energy]\nenergy = v^2 + k * x^2\nconserved-if-zero = kk"}}),
        "t.model:19:21: ",
@@ -316,7 +316,7 @@ const char* const kCompoundPendulum = R"(# compound_pendulum.model
 [model]
 name = compound-pendulum
 description = rigid arm with joint friction, theta from upright (pi = hanging)
-input = u                          # optional; at most one scalar input
+input = u                          # optional: inputs, 'a [V], b' for several
 stiff = false                      # optional (default false)
 
 [states]
@@ -351,8 +351,8 @@ TEST(ModelFile, ValidFileParsesToTheExpectedStructure) {
   EXPECT_EQ(m.path, "compound.model");
   EXPECT_EQ(m.name, "compound-pendulum");
   EXPECT_EQ(m.description, "rigid arm with joint friction, theta from upright (pi = hanging)");
-  ASSERT_TRUE(m.input.has_value());
-  EXPECT_EQ(*m.input, "u");
+  ASSERT_EQ(m.inputs.size(), 1u);
+  EXPECT_EQ(m.inputs[0].name, "u");
   EXPECT_FALSE(m.stiff);
   EXPECT_FALSE(m.discrete);
   ASSERT_EQ(m.states.size(), 2u);
@@ -409,7 +409,7 @@ TEST(ModelFile, StepModelsSectionsInAnyOrderAndDtInLets) {
   const ModelFile m = ParseModelFile(text, "cv.model");
   EXPECT_TRUE(m.discrete);
   EXPECT_TRUE(m.stiff);
-  EXPECT_FALSE(m.input.has_value());
+  EXPECT_TRUE(m.inputs.empty());
   EXPECT_EQ(m.states[1].unit, "");
   EXPECT_EQ(m.lets[0].expr.args[0].args[0].args[0].ref, NameRef::kStepLength);
   EXPECT_EQ(m.rhs[1].args[1].ref, NameRef::kLet);

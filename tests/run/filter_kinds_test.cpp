@@ -91,7 +91,7 @@ TEST(FilterKinds, TunableExactlyAsRegistered) {
 // point of the wrong length, a UKF with n + kappa <= 0.
 TEST(FilterKinds, ValidationNeedsTheStateDimension) {
   FilterSpec spec;
-  spec.filter = KfOptions{.operating_point = {0.0, 0.0, 0.0}};
+  spec.filter = KfOptions{.operating_point = {0.0, 0.0, 0.0}, .operating_input = {}};
   std::string error;
   EXPECT_FALSE(IsValidFilterOptions(spec, 2, &error));
   EXPECT_EQ(error.rfind("linearize-at:", 0), 0u) << error;

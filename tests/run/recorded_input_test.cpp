@@ -31,7 +31,7 @@ struct Tanks {
   static constexpr const char* kName = "tanks-test";
   static constexpr const char* kDescription = "two cascaded tanks, pump voltage u";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = true;
+  static constexpr int kInputDim = 1;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"h1", "h2"};
   static constexpr std::array<const char*, 2> kStateUnits = {"m", "m"};
@@ -123,7 +123,7 @@ SimulationSpec Spec(const std::vector<double>& t, const std::vector<double>& u) 
   s.x0 = {0.02, 0.001};
   s.times = t;
   s.inputs = u;
-  s.input_column.assign(1, 'u');  // (not = "u": GCC 12 -Wrestrict false positive)
+  s.input_columns.assign(1, std::string(1, 'u'));  // (not = "u": GCC 12 -Wrestrict false positive)
   s.measurement = "level";
   return s;
 }

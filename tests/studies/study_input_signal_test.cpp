@@ -53,7 +53,7 @@ TEST(StudyInputSignal, TruthAndFilterSeeTheSameHeldSignal) {
   const SimulationResult truth = sc.model->simulate(sim);
   ASSERT_TRUE(truth.ok) << truth.error;
   FilterData data = study_runner::DataFromTruth(sc, truth, "run 0", 11);
-  ASSERT_TRUE(data.has_input);
+  ASSERT_EQ(data.nu, 1);
   ASSERT_EQ(data.u.size(), 500u);
   for (size_t k = 0; k < data.u.size(); ++k) ASSERT_EQ(data.u[k], sc.truth.inputs[k + 1]) << k;
 
@@ -64,11 +64,11 @@ TEST(StudyInputSignal, TruthAndFilterSeeTheSameHeldSignal) {
   const double nis = ComputeNoTruthMetrics(with, {"x", "theta"}, 0).mean_nis;
   EXPECT_GT(nis, 2 - 0.3) << nis;
   EXPECT_LT(nis, 2 + 0.3) << nis;
-  data.has_input = false;  // the filter without the signal (u = 0)
+  data.nu = 0;  // the filter without the signal (u = 0)
   data.u.clear();
   const FilterRunOutput without = sc.model->run_filter(spec, data);
-  const double wrong = without.summary.ok ? ComputeNoTruthMetrics(without, {"x", "theta"}, 0).mean_nis
-                                          : INFINITY;
+  const double wrong =
+      without.summary.ok ? ComputeNoTruthMetrics(without, {"x", "theta"}, 0).mean_nis : INFINITY;
   EXPECT_GT(wrong, 10.0) << "the input should matter: mean NIS " << wrong;
   std::printf("  mean NIS with the signal %.3f, without it %.3g\n", nis, wrong);
 }
@@ -119,8 +119,7 @@ TEST(StudyInputSignal, ErrorsNameTheScenarioKey) {
   pendulum = testing::Replace(pendulum, "diag 1e-8,1e-6,1e-8,1e-6", "diag 1e-8,1e-6");
   pendulum = testing::Replace(pendulum, "meas-noise-var = 1e-4,1e-4", "meas-noise-var = 1e-4");
   pendulum = testing::Replace(pendulum, "1e-4,1e-4,1e-4,1e-4", "1e-4,1e-4");
-  const std::string no_input =
-      testing::ErrorText([&] { ParseStudyConfig(pendulum, "s.ini"); });
+  const std::string no_input = testing::ErrorText([&] { ParseStudyConfig(pendulum, "s.ini"); });
   EXPECT_NE(no_input.find("[scenario.cart] input: model 'pendulum' has no input"),
             std::string::npos)
       << no_input;

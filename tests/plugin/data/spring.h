@@ -13,7 +13,7 @@ struct Spring {
   static constexpr const char* kName = "spring";
   static constexpr const char* kDescription = "spring-mass-damper (user header)";
   static constexpr int kStateDim = 2;
-  static constexpr bool kHasInput = false;
+  static constexpr int kInputDim = 0;
   static constexpr bool kStiff = false;
   static constexpr std::array<const char*, 2> kStateNames = {"x", "v"};
   static constexpr std::array<const char*, 2> kStateUnits = {"m", "m/s"};

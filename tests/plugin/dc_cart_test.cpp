@@ -1,0 +1,137 @@
+// The DC-motor cart example (examples/dc_cart/): a model with two inputs and
+// a measurement that sees an input (the motor current). Its README
+// walkthrough as written: output error with both outputs weighted by R must
+// cover the truth (each parameter and x0 within 3 standard errors), each
+// output's residual sd must be its sensor's noise (within 10 %), and the
+// validation's free simulation must be within 1.05 x the noise-free floor
+// per output. Then the bad inputs: a missing input column, a NaN input and a
+// constant --input of the wrong length, each an error naming it, exit 2 and
+// nothing written. Label "plugin": the model file compiles (about 30 s).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli/cli_test_util.h"
+
+namespace estlab::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kDir = std::string(ESTLAB_SOURCE_DIR) + "/examples/dc_cart";
+const std::string kModel = kDir + "/dc_cart.model";
+
+std::string Cache() {
+  return (fs::path(ESTLAB_BINARY).parent_path() / "test-model-cache").string();
+}
+RunResult Est(const std::string& args, const std::string& cwd) {
+  return RunEstlab("--model-cache '" + Cache() + "' " + args, cwd);
+}
+
+// The number after "key": inside the object that follows "section": (the
+// first "key" when section is empty); NaN when absent.
+double JsonNumber(const std::string& json, const std::string& section, const std::string& key) {
+  size_t at = section.empty() ? 0 : json.find("\"" + section + "\": ");
+  if (at == std::string::npos) return std::nan("");
+  at = json.find("\"" + key + "\": ", at);
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+TEST(DcCart, ReadmeWalkthroughCoversTheTruthWithTwoInputsAndACurrentSensor) {
+  const std::vector<std::string> commands =
+      MarkdownCommands("examples/dc_cart/README.md", "## Walkthrough");
+  ASSERT_EQ(commands.size(), 4u);
+  TempDir dir;
+  const char* names[] = {"m", "b", "K", "R"};
+  const double truth[] = {2.0, 3.0, 0.05, 1.5};
+  for (const std::string& command : commands) {
+    const bool tune = command.rfind("tune ", 0) == 0;
+    const RunResult r = Est(command + (tune ? " --json" : ""), dir.path());
+    ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.err << r.out;
+    if (!tune) continue;
+    EXPECT_NE(r.out.find("\"status\": \"converged\""), std::string::npos) << r.out;
+    for (int j = 0; j < 4; ++j) {
+      const double v = JsonNumber(r.out, "tuned", names[j]);
+      const double se = JsonNumber(r.out, "std_errors", names[j]);
+      EXPECT_LT(std::abs(v - truth[j]), 3 * se) << names[j] << " " << v << " +- " << se;
+      std::printf("  %s = %.6g +- %.2g (true %g)\n", names[j], v, se, truth[j]);
+    }
+    EXPECT_NEAR(JsonNumber(r.out, "x0", "x"), 0.05, 3 * JsonNumber(r.out, "x0_std_errors", "x"));
+    EXPECT_NEAR(JsonNumber(r.out, "x0", "v"), 0.1, 3 * JsonNumber(r.out, "x0_std_errors", "v"));
+    // The weights: position 1 (R_11 / R_11), current sqrt(1e-8 / 1e-4); the
+    // residual sds are the sensors' noise sds.
+    EXPECT_DOUBLE_EQ(JsonNumber(r.out, "output_weights", "current"), 0.01);
+    EXPECT_NEAR(JsonNumber(r.out, "residual_sds", "x"), 1e-4, 1e-5);
+    EXPECT_NEAR(JsonNumber(r.out, "residual_sds", "current"), 1e-2, 1e-3);
+    const size_t validation = r.out.find("\"validation\"");
+    ASSERT_NE(validation, std::string::npos);
+    const std::string v = r.out.substr(validation);
+    for (const char* output : {"x", "current"}) {
+      const double tuned = JsonNumber(v.substr(v.find("\"tuned\"")), "whole_rmse", output);
+      const double floor = JsonNumber(v.substr(v.find("\"oracle\"")), "whole_rmse", output);
+      EXPECT_GT(floor, 0.0) << output;
+      EXPECT_LE(tuned, 1.05 * floor) << output << " " << tuned << " vs floor " << floor;
+      std::printf("  validation free-simulation RMSE of %s %.4g, floor %.4g (x%.3f)\n", output,
+                  tuned, floor, tuned / floor);
+    }
+  }
+  const std::string train = ReadFile(dir.path() + "/train.csv");
+  EXPECT_EQ(train.rfind("t,x,v,V,F,z_x,z_current,y_x,y_current\n", 0), 0u) << train.substr(0, 80);
+  EXPECT_TRUE(dir.Exists("plots/free-simulation.png"));
+  EXPECT_TRUE(dir.Exists("filtered_valid.csv"));
+}
+
+TEST(DcCart, BadInputsNameTheColumnOrTheValueAndWriteNothing) {
+  TempDir dir;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir.File(name)) << text;
+  };
+  write("no_f.csv", "t,V,z_x,z_current\n0,1,0,0.5\n0.01,1,0,0.5\n");
+  write("nan_v.csv", "t,V,F,z_x,z_current\n0,1,0,0,0.5\n0.01,nan,0,0,0.5\n");
+  struct Case {
+    std::string args, message;
+  };
+  const std::vector<Case> cases = {
+      {"filter --model " + kModel +
+           " --data no_f.csv --measure encoder-current --q-diag 0,1e-6 --r-diag 1e-8,1e-4 --out "
+           "o.csv",
+       "no_f.csv: no input column 'F' for the inputs of model 'dc-cart'"},
+      {"filter --model " + kModel +
+           " --data nan_v.csv --measure encoder-current --q-diag 0,1e-6 --r-diag 1e-8,1e-4 --out "
+           "o.csv",
+       "nan_v.csv:3: column 2 ('V'): missing input"},
+      {"filter --model " + kModel +
+           " --data no_f.csv --measure encoder-current --q-diag 0,1e-6 --r-diag 1e-8,1e-4 --input "
+           "1 --out o.csv",
+       "--input: 1 value(s) for model 'dc-cart' with 2 inputs"},
+      {"filter --model " + kModel +
+           " --data no_f.csv --measure encoder-current --q-diag 0,1e-6 --r-diag 1e-8,1e-4 "
+           "--input 1,2 --out o.csv",
+       "no input column 'F' for the inputs of model 'dc-cart' (map another column with --column "
+       "F=NAME; every input needs its column)"},
+      {"simulate --model " + kModel + " --input 1 --out o.csv",
+       "--input: 1 value(s) for model 'dc-cart' with 2 inputs"},
+  };
+  for (const Case& c : cases) {
+    const RunResult r = Est(c.args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(dir.Exists("o.csv")) << c.args;
+  }
+  // --column maps a column of another name onto the input F.
+  const RunResult mapped = Est("filter --model " + kModel +
+                                   " --data no_f.csv --measure encoder-current --column F=V "
+                                   "--q-diag 0,1e-6 --r-diag 1e-8,1e-4 "
+                                   "--out o.csv",
+                               dir.path());
+  EXPECT_EQ(mapped.exit_code, 0) << mapped.err;
+}
+
+}  // namespace
+}  // namespace estlab::testing
