@@ -15,6 +15,7 @@
 // new would otherwise count every other test's allocations too.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -23,10 +24,13 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "models/double_pendulum.h"
 #include "models/pendulum.h"
+#include "src/core/params.h"
 #include "src/filters/ekf.h"
 #include "src/filters/kalman.h"
 #include "src/filters/particle.h"
@@ -173,6 +177,53 @@ class AllocationCounter {
   }
 };
 
+// A cart driven by a motor voltage V and a load force F (two inputs), its
+// position and motor current measured; the current sees V (h(x, u)).
+struct DcCart {
+  static constexpr const char* kName = "dc-cart-alloc";
+  static constexpr const char* kDescription = "two inputs, h(x, u)";
+  static constexpr int kStateDim = 2;
+  static constexpr int kInputDim = 2;
+  static constexpr std::array<const char*, 2> kInputNames = {"V", "F"};
+  static constexpr std::array<const char*, 2> kInputUnits = {"V", "N"};
+  static constexpr bool kStiff = false;
+  static constexpr std::array<const char*, 2> kStateNames = {"x", "v"};
+  static constexpr std::array<const char*, 2> kStateUnits = {"m", "m/s"};
+  static constexpr std::array<bool, 2> kAngleStates = {false, false};
+  static constexpr std::array<std::pair<int, int>, 1> kPositionRatePairs = {{{0, 1}}};
+  struct Params {
+    double m = 2.0, b = 3.0, K = 0.05, R = 1.5, r = 0.02;
+  };
+  static constexpr std::array<ParamSpec<Params>, 1> kParams = {
+      {{"m", &Params::m, "mass [kg]", Constraint::kPositive}}};
+  template <class T>
+  static Vec<T, 2> Rhs(const T&, const Vec<T, 2>& x, const Vec<double, 2>& u, const Params& p) {
+    const T i = (u(0) - p.K * x(1) / p.r) / p.R;
+    return Vec<T, 2>(x(1), (p.K * i / p.r - p.b * x(1) + u(1)) / p.m);
+  }
+  static constexpr std::array<const char*, 0> kInvariantNames = {};
+  static bool InvariantsHold(const Params&, const Vec<double, 2>&) { return false; }
+  static Vec<double, 0> Invariants(const Vec<double, 2>&, const Params&) { return {}; }
+  struct EncoderCurrent {
+    static constexpr const char* kName = "encoder-current";
+    static constexpr int kDim = 2;
+    static constexpr std::array<const char*, 2> kOutputs = {"x", "current"};
+    static constexpr std::array<bool, 2> kAngleOutputs = {false, false};
+    template <class T>
+    static Vec<T, 2> Eval(const Vec<T, 2>& x, const Vec<double, 2>& u, const Params& p) {
+      return Vec<T, 2>(x(0), (u(0) - p.K * x(1) / p.r) / p.R);
+    }
+  };
+  using Measurements = std::tuple<EncoderCurrent>;
+};
+
+// The input of step k: a wobbling voltage and load (zero-input models: 0).
+template <class Model>
+InputOf<Model> StepInput(int k) {
+  const double u[2] = {1.0 + std::sin(0.13 * k), 0.5 * std::cos(0.07 * k)};
+  return InputFrom<Model>(u);
+}
+
 template <class Model>
 Vec<double, Model::kStateDim> StartState() {
   Vec<double, Model::kStateDim> x = Vec<double, Model::kStateDim>::Zero();
@@ -192,8 +243,10 @@ std::vector<Vec<double, Meas::kDim>> Measurements(const typename Model::Params& 
   std::vector<Vec<double, Meas::kDim>> z;
   z.reserve(kSteps);
   for (int k = 0; k < kSteps; ++k) {
+    truth->SetInput(StepInput<Model>(k));
     x = truth->Step(x, k * kDt, (k + 1) * kDt);
-    Vec<double, Meas::kDim> zk = Meas::template Eval<double>(x, params);
+    Vec<double, Meas::kDim> zk =
+        EvalMeasurement<Model, Meas, double>(x, StepInput<Model>(k + 1), params);
     for (int j = 0; j < Meas::kDim; ++j) zk(j) += 0.01 * std::sin(0.37 * k + j);
     z.push_back(zk);
   }
@@ -223,7 +276,9 @@ long AllocationsInSteps(Filter<Model, Meas>& filter, const typename Model::Param
   volatile double consumed = 0.0;
   AllocationCounter counter;
   for (int k = 0; k < kSteps; ++k) {
+    filter.SetInput(StepInput<Model>(k));
     const FilterStatus status = filter.Predict(k * kDt, (k + 1) * kDt, Q);
+    filter.SetInput(StepInput<Model>(k + 1));  // seen by h(x, u)
     const StepResult<M> r = filter.Update(z[k], R);
     if ((status != FilterStatus::kOk || r.status != FilterStatus::kOk) && failed_step < 0)
       failed_step = k;
@@ -298,6 +353,11 @@ TEST(AllocationFree, GaussianFiltersPendulumRk4) {
 
 TEST(AllocationFree, GaussianFiltersDoublePendulumRk4) {
   CheckGaussianFilters<DoublePendulum, DoublePendulum::Angles>();
+}
+
+// Two inputs and a measurement that sees one (issue 34, done-when 5).
+TEST(AllocationFree, GaussianFiltersTwoInputsAndHxuRk4) {
+  CheckGaussianFilters<DcCart, DcCart::EncoderCurrent>();
 }
 
 // The particle filter keeps its particles in storage allocated once; with
