@@ -437,9 +437,10 @@ void RegisterAll() {
   RegisterBenchmark("Floor/double-pendulum/rk4-with-jacobian/x1", Transitions_<DP>, 1, true, rk4);
   RegisterBenchmark("Floor/double-pendulum/rk4/x9", Transitions_<DP>, 9, false, rk4);
   // The same model from examples/models/double_pendulum.model (estlab_add_model).
-  RegisterBenchmark("EKF/double-pendulum-file/n4m2/rk4", Ekf_<DpFile, DpFile::AnglesMeasurement>, rk4);
-  RegisterBenchmark("UKF/double-pendulum-file/n4m2/rk4", Sigma_<DpFile, DpFile::AnglesMeasurement>, rk4,
-                    SigmaRule::kUnscented);
+  RegisterBenchmark("EKF/double-pendulum-file/n4m2/rk4", Ekf_<DpFile, DpFile::AnglesMeasurement>,
+                    rk4);
+  RegisterBenchmark("UKF/double-pendulum-file/n4m2/rk4", Sigma_<DpFile, DpFile::AnglesMeasurement>,
+                    rk4, SigmaRule::kUnscented);
   // Whole runs through the registry entries (1000 steps), built-in and file.
   for (const char* name : {"double-pendulum", "double-pendulum-file"}) {
     RegisterBenchmark((std::string("RunFilter/") + name + "/ekf-rk4/1000-steps").c_str(),

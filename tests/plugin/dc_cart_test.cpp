@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cli/cli_test_util.h"
+#include "plugin/plugin_test_util.h"
 
 namespace estlab::testing {
 namespace {
@@ -26,22 +27,7 @@ namespace fs = std::filesystem;
 const std::string kDir = std::string(ESTLAB_SOURCE_DIR) + "/examples/dc_cart";
 const std::string kModel = kDir + "/dc_cart.model";
 
-std::string Cache() {
-  return (fs::path(ESTLAB_BINARY).parent_path() / "test-model-cache").string();
-}
-RunResult Est(const std::string& args, const std::string& cwd) {
-  return RunEstlab("--model-cache '" + Cache() + "' " + args, cwd);
-}
-
-// The number after "key": inside the object that follows "section": (the
-// first "key" when section is empty); NaN when absent.
-double JsonNumber(const std::string& json, const std::string& section, const std::string& key) {
-  size_t at = section.empty() ? 0 : json.find("\"" + section + "\": ");
-  if (at == std::string::npos) return std::nan("");
-  at = json.find("\"" + key + "\": ", at);
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
-}
+RunResult Est(const std::string& args, const std::string& cwd) { return EstCached(args, cwd); }
 
 TEST(DcCart, ReadmeWalkthroughCoversTheTruthWithTwoInputsAndACurrentSensor) {
   const std::vector<std::string> commands =
