@@ -99,9 +99,9 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
   };
   ForEachStep<M>(
       spec, d,
-      [&](size_t k, double t0, double t1, const double* u) {
+      [&](size_t k, double t0, double t1, const double* u0, const double* u1) {
         const StateCov p_plus = filter->cov();
-        filter->SetInput(InputFrom<Model>(u));
+        filter->SetInputPath(InputFrom<Model>(u0), InputFrom<Model>(u1));
         const StateCov Q =
             spec.q_white_accel ? WhiteAccelQ<Model>(spec.qc, t1 - t0) : MatFromVector<N, N>(spec.q);
         if (filter->Predict(t0, t1, Q) != FilterStatus::kOk) fail(k, filter->last_error());

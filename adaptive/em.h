@@ -97,12 +97,13 @@ bool CubaturePoints(const SigmaPointSet& set, const Vec<double, D>& mean, const 
   return DrawSigmaPoints<D>(set, mean, jittered, false, points);
 }
 
-// Adds A_k of the transition from row a to row b (times t0 -> t1, input u).
+// Adds A_k of the transition from row a to row b (times t0 -> t1, input u
+// over the step).
 template <class Model, class Meas>
 bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& joint,
                    const SmoothedMoments<Model::kStateDim>& a,
                    const SmoothedMoments<Model::kStateDim>& b, double t0, double t1,
-                   const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                   const InputPath<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   Vec<double, 2 * N> mean;
   mean << a.x, b.x;
@@ -185,10 +186,10 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
     const std::string where = d.path.empty() ? "" : " of " + d.path;
     const bool complete = ForEachStep<Meas::kDim>(
         spec, d,
-        [&](size_t k, double t0, double t1, const double* u) {
+        [&](size_t k, double t0, double t1, const double* u0, const double* u1) {
           if (k == 0) return true;  // from the prior: not re-estimated
-          if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, InputFrom<Model>(u), sums))
-            return true;
+          const InputPath<Model> u(InputFrom<Model>(u0), InputFrom<Model>(u1), t0, t1);
+          if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, u, sums)) return true;
           *why = "the smoothed joint covariance of rows " + std::to_string(k - 1) + " and " +
                  std::to_string(k) + where + " is not positive semidefinite";
           return false;

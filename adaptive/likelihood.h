@@ -150,7 +150,7 @@ class InnovationLikelihood {
   // discretised map; else Phi, fixed-step or CVODES) and the measurement
   // residual wrap(z - h(x)) (the KF's linearised h).
   Vec<double, kN> PointTransition(const Vec<double, kN>& x, double t0, double t1,
-                                  const InputOf<Model>& u) const {
+                                  const InputPath<Model>& u) const {
     if (!kf_) return Propagate<double>(x, t0, t1, u, params_, nullptr);
     const KfDiscretization<kN, kU>* step = FindKfStep(t1 - t0);
     if (step == nullptr)  // SetUpKf saw every step of the data
@@ -158,7 +158,7 @@ class InnovationLikelihood {
     Vec<double, kN> next = x;
     Mat<kN, kN> P = Mat<kN, kN>::Zero();
     const Mat<kN, kN> no_noise = Mat<kN, kN>::Zero();
-    KfPredict<Model, kM>(kf_lin_, *step, u, no_noise, &next, &P);
+    KfPredict<Model, kM>(kf_lin_, *step, u.u0, u.u1, no_noise, &next, &P);
     return next;
   }
   Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x,
@@ -261,17 +261,16 @@ class InnovationLikelihood {
     bool have_propagated = false;
   };
   template <class T, class P>
-  bool Predict(Belief<T>* b, double t0, double t1, const InputOf<Model>& u,
-               const StateCovT<T>& Q, const P& p, std::string* why) const;
+  bool Predict(Belief<T>* b, double t0, double t1, const InputPath<Model>& u, const StateCovT<T>& Q,
+               const P& p, std::string* why) const;
   template <class T, class P>
-  bool Update(Belief<T>* b, const Vec<double, kM>& z, const InputOf<Model>& u,
-              const MeasCovT<T>& R, const P& p, MeasT<T>* whitened, T* log_det,
-              std::string* why) const;
+  bool Update(Belief<T>* b, const Vec<double, kM>& z, const InputOf<Model>& u, const MeasCovT<T>& R,
+              const P& p, MeasT<T>* whitened, T* log_det, std::string* why) const;
   // x- = Phi(x) (and F = dPhi/dx when F is not null) for scalar T: the
   // CVODES transition for double, AD through the fixed-step integrator
   // otherwise (a nested Jet for F when T is a Jet).
   template <class T, class P>
-  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, const InputOf<Model>& u,
+  StateT<T> Propagate(const StateT<T>& x, double t0, double t1, const InputPath<Model>& u,
                       const P& p, StateCovT<T>* F) const;
   // The CVODES flow differentiated in C directions, made on first use (one
   // per Jet size the tuner runs).
@@ -461,13 +460,14 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
     b.P = p0_.template cast<T>();
     b.have_propagated = false;
     long update_index = 0;
-    auto predict = [&](size_t k, double t0, double t1, const double* u) {
+    auto predict = [&](size_t k, double t0, double t1, const double* u0, const double* u1) {
       if (q_.DependsOnDt() && t1 - t0 != q_dt) {
         q_dt = t1 - t0;
         Q = q_.template Matrix<T>(theta_q, q_dt);
       }
       try {
-        if (!Predict<T>(&b, t0, t1, InputFrom<Model>(u), Q, p, &reason))
+        const InputPath<Model> u(InputFrom<Model>(u0), InputFrom<Model>(u1), t0, t1);
+        if (!Predict<T>(&b, t0, t1, u, Q, p, &reason))
           return fail(d, k, "prediction failed: " + reason);
       } catch (const NumericalError& e) {  // CVODES failed
         if (why != nullptr) *why = e.what() + OneIntervalBoundNote(e.what());
@@ -498,11 +498,11 @@ template <class Model, class Meas>
 template <class T, class P>
 typename InnovationLikelihood<Model, Meas>::template StateT<T>
 InnovationLikelihood<Model, Meas>::Propagate(const StateT<T>& x, double t0, double t1,
-                                             const InputOf<Model>& u, const P& p,
+                                             const InputPath<Model>& u, const P& p,
                                              StateCovT<T>* F) const {
   if constexpr (std::is_same_v<T, double>) {
     if (cvodes_ != nullptr) {  // x- = Phi(x), F = dPhi/dx from the sensitivities
-      cvodes_->SetInput(u);
+      cvodes_->SetInput(u.u0, u.u1);
       const long before = cvodes_->stats().internal_steps;
       ++integrated_intervals_;
       try {
@@ -552,7 +552,7 @@ CvodesThetaFlow<Model, C>& InnovationLikelihood<Model, Meas>::ThetaFlow() const 
 template <class Model, class Meas>
 template <class T, class P>
 bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double t1,
-                                                const InputOf<Model>& u, const StateCovT<T>& Q,
+                                                const InputPath<Model>& u, const StateCovT<T>& Q,
                                                 const P& p, std::string* why) const {
   if (kf_) {
     const KfDiscretization<kN, kU>* step = FindKfStep(t1 - t0);
@@ -560,7 +560,7 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
       *why = "no KF discretisation for this step";
       return false;
     }
-    KfPredict<Model, kM, T>(kf_lin_, *step, u, Q, &b->x, &b->P);
+    KfPredict<Model, kM, T>(kf_lin_, *step, u.u0, u.u1, Q, &b->x, &b->P);
   } else if (sigma_) {
     // X_i = x + L xi_i (L L^T = P + jitter I),  X-_i = Phi(X_i)
     b->have_propagated = false;
@@ -603,9 +603,9 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
       *why = "Cholesky of P- failed (not positive definite)";
       return false;
     }
-    status = SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                         &b->measurement_points, b->x, b->P, z, R, input, p, &u,
-                                         why);
+    status =
+        SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
+                                    &b->measurement_points, b->x, b->P, z, R, input, p, &u, why);
   } else {
     status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, input, p, iterations_, &u, why);
   }
@@ -623,13 +623,15 @@ void InnovationLikelihood<Model, Meas>::SetUpKf(const KfOptions& options,
   LinearizedKf<Model, Meas> kf(params_, options);  // throws for a bad x*
   kf.Initialize(x0_, p0_);
   kf_lin_ = kf.linearization();
-  // Phi, Gamma, d for every step length that Run() will meet.
+  // Phi, Gamma, d (and Gamma1 for a linear hold) for every step length
+  // that Run() will meet.
+  const bool ramp = spec_.transition.input_hold == InputHold::kLinear;
   auto add = [&](double dt) {
     if (!(dt > 0.0) || FindKfStep(dt) != nullptr) return;
     if (kf.Predict(0.0, dt, Mat<kN, kN>::Zero()) != FilterStatus::kOk)
       throw InputError("the linearised model (kf) is not finite at the operating point: " +
                        kf.last_error());
-    kf_steps_.push_back({dt, kf.discretization()});
+    kf_steps_.push_back({dt, kf.DiscretizationFor(dt, ramp)});
   };
   for (const FilterData& d : datasets) {
     if (d.t.empty()) continue;

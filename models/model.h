@@ -37,9 +37,9 @@
 #define ESTLAB_MODELS_MODEL_H_
 
 #include <concepts>
-#include <type_traits>
 #include <cstddef>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 
 #include "src/core/types.h"
@@ -63,7 +63,7 @@ using InputOf = std::conditional_t<(kInputDim<M> > 1), Vec<double, kInputCols<M>
 // The input of M from nu doubles (the zero input when u is null).
 template <class M>
 InputOf<M> InputFrom(const double* u) {
-  if constexpr (kInputDim<M> > 1) {
+  if constexpr (kInputDim<M> >= 2) {
     if (u == nullptr) return InputOf<M>::Zero();
     return Eigen::Map<const InputOf<M>>(u);
   } else {
@@ -73,14 +73,14 @@ InputOf<M> InputFrom(const double* u) {
 // Component i of an input (0 <= i < max(1, nu)).
 template <class M>
 double InputComponent(const InputOf<M>& u, int i) {
-  if constexpr (kInputDim<M> > 1)
+  if constexpr (kInputDim<M> >= 2)
     return u(i);
   else
     return (void)i, u;
 }
 template <class M>
 void SetInputComponent(InputOf<M>* u, int i, double value) {
-  if constexpr (kInputDim<M> > 1)
+  if constexpr (kInputDim<M> >= 2)
     (*u)(i) = value;
   else
     (void)i, *u = value;
@@ -133,16 +133,14 @@ inline constexpr bool kPacketModel = IsPacketModel<M>();
 // discrete-time model.
 template <class M>
 concept ContinuousDynamics =
-    !kDiscreteTime<M> && requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
-                                  const typename M::Params& p) {
+    !kDiscreteTime<M> &&
+    requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u, const typename M::Params& p) {
   { M::template Rhs<double>(0.0, x, u, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 template <class M>
 concept DiscreteDynamics = kDiscreteTime<M> &&
     requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u, const typename M::Params& p) {
-  {
-    M::template Step<double>(0.0, x, 0.1, u, p)
-    } -> std::convertible_to<Vec<double, M::kStateDim>>;
+  { M::template Step<double>(0.0, x, 0.1, u, p) } -> std::convertible_to<Vec<double, M::kStateDim>>;
 };
 
 template <class M>
@@ -170,8 +168,8 @@ concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const InputO
 
 // True for a measurement h(x, u, p) of M: Eval takes the input.
 template <class Meas, class M>
-concept MeasurementSeesInput =
-    requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u, const typename M::Params& p) {
+concept MeasurementSeesInput = requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
+                                        const typename M::Params& p) {
   { Meas::template Eval<double>(x, u, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
 };
 

@@ -112,6 +112,8 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   std::string input;
   for (double u : sc.truth.input) input += (input.empty() ? "" : ",") + FormatDouble(u);
   add("input", input.empty() ? "0" : input, scen.Get("input"));
+  if (scen.Has("input-hold"))
+    add("input-hold", scen.Get("input-hold")->text, scen.Get("input-hold"));
   // A smoother kind (urts, ...) runs its filter with spec.smooth set below.
   const Value* kind = filt.Get("kind");
   const std::string smoothed = FilterOfSmoother(kind->text);

@@ -108,15 +108,21 @@ const std::vector<std::string> kSimulationKeys = {"x0",
                                                   "measure-at-t0"};
 const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth", "burn-in"};
 const std::vector<std::string> kScenarioKeys = [] {
-  std::vector<std::string> keys = {"model",    "params", "measurement", "prior-x0", "prior-p0-diag",
-                                   "prior-p0", "input",  "description", "data"};
+  std::vector<std::string> keys = {"model",         "params",   "measurement", "prior-x0",
+                                   "prior-p0-diag", "prior-p0", "input",       "input-hold",
+                                   "description",   "data"};
   keys.insert(keys.end(), kSimulationKeys.begin(), kSimulationKeys.end());
   keys.insert(keys.end(), kRecordedKeys.begin(), kRecordedKeys.end());
   return keys;
 }();
 // The [noise.*] keys; the tuner's (tune-<key>, q-param, r-param) come from
 // the tuner key table (StudyTuneKeys).
-const std::vector<std::string> kNoiseOwnKeys = {"q", "q-diag", "q-white-accel", "r", "r-diag", "scenarios", "filters", "description", "role", "init-q-diag", "init-q", "init-q-white-accel", "init-r-diag", "init-r", "init-scale", "params", "param-bounds", "param-prior"};
+const std::vector<std::string> kNoiseOwnKeys = {"q",           "q-diag",       "q-white-accel",
+                                                "r",           "r-diag",       "scenarios",
+                                                "filters",     "description",  "role",
+                                                "init-q-diag", "init-q",       "init-q-white-accel",
+                                                "init-r-diag", "init-r",       "init-scale",
+                                                "params",      "param-bounds", "param-prior"};
 
 // ---------------------------------------------------------------------------
 // Reading the file with Program_options.

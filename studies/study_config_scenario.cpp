@@ -1,6 +1,7 @@
 // The [scenario.NAME] sections: the truth (model, simulation, noise), the
 // prior, and the '|' alternatives (study_config_parts.h).
 #include <Eigen/Core>
+#include <algorithm>
 
 #include <cmath>
 #include <filesystem>
@@ -33,41 +34,43 @@ namespace fs = std::filesystem;
 namespace {
 
 // `input = 2.5 | multisine(...) | prbs(...) | steps(...)` (src/sim/
-// input_signal.h). A signal is sampled at the scenario's output times t_k =
-// k dt into the truth's schedule; the interval before the first measurement
-// holds the first measurement's sample (measure-at-t0 = false), as a filter
-// whose prior is at t = 0 holds the first row's input (src/run/step_loop.h).
+// input_signal.h), one per input for a model with several, comma-separated.
+// A signal is sampled at the scenario's output times t_k = k dt into the
+// truth's schedule; the interval before the first measurement holds the
+// first measurement's sample (measure-at-t0 = false), as a filter whose
+// prior is at t = 0 holds the first row's input (src/run/step_loop.h).
 void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigErrors& err,
                       bool recorded, ScenarioConfig* sc) {
   const ModelEntry& model = *sc->model;
-  if (model.inputs.size() > 1) {  // one constant per input
-    sc->truth.input =
-        Checked(value, err, [&](const std::string& t) { return ParseList(t, "input"); });
-    if (sc->truth.input.size() != model.inputs.size())
-      v.Fail("input", "model '" + model.name + "' has " + std::to_string(model.inputs.size()) +
-                          " inputs: give one constant each, comma-separated (signals drive "
-                          "single-input models)");
-    return;
-  }
   const std::string base = fs::path(err.path()).parent_path().string();  // file(...) paths
-  const InputSignal signal =
-      Checked(value, err, [&](const std::string& t) { return ParseInputSignal(t, "input", base); });
-  if (signal.kind == InputSignal::kConstant) {
-    if (model.has_input()) sc->truth.input = {signal.mean};
-    if (signal.mean != 0 && !model.has_input())
+  if (!model.has_input()) {
+    const InputSignal signal = Checked(
+        value, err, [&](const std::string& t) { return ParseInputSignal(t, "input", base); });
+    if (signal.kind != InputSignal::kConstant || signal.mean != 0)
       v.Fail("input", "model '" + model.name + "' has no input");
     return;
   }
-  if (!model.has_input()) v.Fail("input", "model '" + model.name + "' has no input");
+  const std::vector<InputSignal> signals = Checked(value, err, [&](const std::string& t) {
+    return ParseInputSignals(t, "input", model.inputs, base);
+  });
+  if (std::all_of(signals.begin(), signals.end(),
+                  [](const InputSignal& s) { return s.kind == InputSignal::kConstant; })) {
+    sc->truth.input.clear();
+    for (const InputSignal& s : signals) sc->truth.input.push_back(s.mean);
+    return;
+  }
   if (recorded)
     v.Fail("input", "a signal applies to simulated runs; recorded data carry their input column");
   SimulationSpec& truth = sc->truth;
   truth.times = OutputTimes(truth);  // k dt, as without a signal
-  if (const std::string why = signal.Covers(truth.times.front(), truth.times.back()); !why.empty())
-    v.Fail("input", why);
+  for (const InputSignal& signal : signals)
+    if (const std::string why = signal.Covers(truth.times.front(), truth.times.back());
+        !why.empty())
+      v.Fail("input", why);
   for (size_t k = 0; k < truth.times.size(); ++k) {
     const size_t sample = (k == 0 && !sc->measure_at_t0 && truth.times.size() > 1) ? 1 : k;
-    truth.inputs.push_back(signal.At(truth.times[sample]));
+    for (const InputSignal& signal : signals)
+      truth.inputs.push_back(signal.At(truth.times[sample]));
   }
   sc->truth_description += ", input " + Trim(value.text);
 }
@@ -166,6 +169,10 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     tr.max_steps = Checked(*get("truth-max-steps"), err, [](const std::string& t) {
       return ParseInteger(t, "truth-max-steps", 1);
     });
+  // How the input goes between samples, for the truth and every filter.
+  if (v.Has("input-hold"))
+    tr.input_hold =
+        Checked(*get("input-hold"), err, [](const std::string& t) { return ParseInputHold(t); });
   std::string error;
   if (!tr.IsValid(&error)) v.FailSection(error);
   sc.truth_description = IntegratorName(tr.integrator);

@@ -131,13 +131,13 @@ FilterData DataFromTruth(const ScenarioConfig& sc, const SimulationResult& truth
   data.path = label;
   data.m = int(truth.columns.size()) - 1 - n;
   data.has_truth = true;
-  // An input signal (held from each row on): one value per row, as the
-  // signals drive single-input models only.
-  data.nu = sc.truth.inputs.empty() ? 0 : 1;
+  // Input signals: one value per input per row (the truth's schedule).
+  const size_t nu = sc.truth.inputs.empty() ? 0 : sc.model->inputs.size();
+  data.nu = int(nu);
   for (size_t k = sc.measure_at_t0 ? 0 : 1; k < truth.rows.size(); ++k) {
     const auto& row = truth.rows[k];
     data.t.push_back(row[0]);
-    if (data.nu > 0) data.u.push_back(sc.truth.inputs[k]);
+    for (size_t i = 0; i < nu; ++i) data.u.push_back(sc.truth.inputs[k * nu + i]);
     data.lines.push_back(long(k));
     for (int i = 0; i < n; ++i) data.truth.push_back(row[1 + i]);
     for (int j = 0; j < data.m; ++j)

@@ -1,4 +1,5 @@
 // estlab simulate: truth trajectories and noisy measurements.
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <cmath>
 #include <fstream>
@@ -36,6 +37,14 @@ constexpr const char* kExamples = R"(Examples:
   # (column 'volts' as the model's input u), noisy and noise-free outputs:
   estlab simulate --model two-tanks.model --data pump.csv --column u=volts \
       --x0 h1=0.1,h2=0.05 --measure level --meas-noise-var 1e-6 --out sim.csv
+  # The same with the pump voltage interpolated linearly between samples:
+  estlab simulate --model two-tanks.model --data pump.csv --column u=volts --input-hold linear \
+      --x0 h1=0.1,h2=0.05 --measure level --out sim-linear.csv
+  # A model with two inputs (voltage V, load force F): a multisine voltage and
+  # a PRBS load, each with its own seed:
+  estlab simulate --model examples/dc_cart/dc_cart.model --t-end 20 --dt 0.01 \
+      --input 'multisine(rms=2, mean=6, band=0.05:2, sines=8, seed=1), prbs(amplitude=0.5, period=0.5, order=7, seed=2)' \
+      --measure encoder-current --meas-noise-var 1e-6,1e-4 --out cart2.csv
   # A cart-pole pushed by a PRBS force (+-2 N, a new bit every 0.2 s), the
   # force written as column u:
   estlab simulate --model cart-pole --input 'prbs(amplitude=2, period=0.2, order=7)' \
@@ -47,7 +56,8 @@ integrator, tolerances, x0, noise variances and seed. Process noise, when
 given, is a draw N(0, diag(v)) added to the state after each output step.
 With --data FILE the rows are at FILE's times (x0 at the first) and a model's
 input is FILE's column named as the input, or 'u' (or --column u=NAME), held constant from each row to
-the next (zero-order hold; CVODES restarts where it changes); the output then
+the next (--input-hold zoh, the default) or following the line between the samples
+(--input-hold linear); CVODES restarts at every sample where the input changes; the output then
 has the input's column after the states and, with --meas-noise-var, the noise-free
 outputs as y_<output> beside the noisy z_<output>.
 On a CVODES failure the rows computed so far go to <out stem>.partial.csv
@@ -93,9 +103,10 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   else if (spec.inputs.empty())
     j.Key("input").Value(spec.input.empty() ? 0.0 : spec.input[0]);
   else if (data_path.empty())
-    j.Key("input").Value(input_text + ", sampled at the output times, zero-order hold");
+    j.Key("input").Value(input_text + ", sampled at the output times");
   else
-    j.Key("input").Value("recorded, zero-order hold");
+    j.Key("input").Value("recorded");
+  j.Key("input_hold").Value(InputHoldName(spec.transition.input_hold));
   j.Key("process_noise_var").Value(spec.process_noise_var);
   if (!spec.measurement.empty()) {
     j.Key("measurement").Value(spec.measurement);
@@ -141,33 +152,32 @@ std::vector<std::pair<std::string, double>> ConfigParams(
   return out;
 }
 
-// --input: a constant, or a seeded signal (src/sim/input_signal.h) sampled
-// at the output times k dt, held to the next and written as the input's
-// column after the states. A model with several inputs takes one constant
-// per input ("1.5,0"); recorded inputs come with --data.
+// --input: a constant or a seeded signal (src/sim/input_signal.h) per
+// input, comma-separated ("1.5,0"; "multisine(...), prbs(...)"), sampled at
+// the output times k dt and written as the inputs' columns after the
+// states. Recorded inputs come with --data.
 void SetInput(const po::variables_map& vm, const ModelEntry& model, SimulationSpec* spec) {
   const std::string text = vm["input"].as<std::string>();
-  if (model.inputs.size() > 1) {
-    if (vm["input"].defaulted()) return;  // 0 for every input
-    spec->input = ParseList(text, "--input");
-    if (spec->input.size() != model.inputs.size())
-      throw InputError(
-          "--input: " + std::to_string(spec->input.size()) + " value(s) for model '" + model.name +
-          "' with " + std::to_string(model.inputs.size()) +
-          " inputs (one constant each, comma-separated; or recorded ones with --data)");
+  if (!model.has_input()) {
+    const InputSignal signal = ParseInputSignal(text, "--input");
+    if (signal.kind != InputSignal::kConstant || signal.mean != 0)
+      throw InputError("--input: model '" + model.name + "' has no input");
     return;
   }
-  const InputSignal signal = ParseInputSignal(text, "--input");
-  if ((signal.kind != InputSignal::kConstant || signal.mean != 0) && !model.has_input())
-    throw InputError("--input: model '" + model.name + "' has no input");
-  if (signal.kind == InputSignal::kConstant) {
-    if (model.has_input()) spec->input = {signal.mean};
+  if (vm["input"].defaulted()) return;  // 0 for every input
+  const std::vector<InputSignal> signals = ParseInputSignals(text, "--input", model.inputs);
+  if (std::all_of(signals.begin(), signals.end(),
+                  [](const InputSignal& s) { return s.kind == InputSignal::kConstant; })) {
+    for (const InputSignal& s : signals) spec->input.push_back(s.mean);
     return;
   }
   spec->times = OutputTimes(*spec);
-  if (const std::string why = signal.Covers(spec->times.front(), spec->times.back()); !why.empty())
-    throw InputError("--input: " + why);
-  for (double t : spec->times) spec->inputs.push_back(signal.At(t));
+  for (size_t i = 0; i < signals.size(); ++i)
+    if (const std::string why = signals[i].Covers(spec->times.front(), spec->times.back());
+        !why.empty())
+      throw InputError("--input: " + why);
+  for (double t : spec->times)
+    for (const InputSignal& s : signals) spec->inputs.push_back(s.At(t));
   spec->input_columns = model.inputs;
 }
 
@@ -213,9 +223,12 @@ int RunSimulate(const std::vector<std::string>& args) {
       "the input (cart-pole force F, dipc force u): a constant, or a seeded signal sampled "
       "at the output times and held to the next: multisine(rms=, mean=, band=f1:f2, sines=, "
       "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...), "
-      "file(FILE[, column]) (FILE's t and u columns, held; --data replays FILE's own times)")(
-      "process-noise-var", po::value<std::string>(),
-      "per-state variances of the noise added after each step")(
+      "file(FILE[, column]) (FILE's t and u columns, held; --data replays FILE's own times); "
+      "a model with several inputs takes one each, comma-separated, in their order")(
+      "input-hold", po::value<std::string>()->default_value("zoh"),
+      "how a recorded or sampled input goes from one sample to the next: zoh (held) | linear "
+      "(the line between the samples)")("process-noise-var", po::value<std::string>(),
+                                        "per-state variances of the noise added after each step")(
       "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
       "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
       "seed", po::value<unsigned long>()->default_value(1), "random seed")(
@@ -225,9 +238,9 @@ int RunSimulate(const std::vector<std::string>& args) {
       "--estimate-param'; its Q/R lines are for 'estlab filter' and skipped); --param wins")(
       "data", po::value<std::string>(),
       "replay FILE: rows at its times, the model's input from its column (named as the "
-      "input, or 'u'; zero-order "
-      "hold)")("column", po::value<std::vector<std::string>>()->composing(),
-               "with --data: map a column, ours=[a*]theirs[+-b], e.g. u=volts")(
+      "input, or 'u'; held as --input-hold says)")(
+      "column", po::value<std::vector<std::string>>()->composing(),
+      "with --data: map a column, ours=[a*]theirs[+-b], e.g. u=volts")(
       "out", po::value<std::string>(), "output CSV path")("json", "print a JSON summary on stdout");
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -282,6 +295,11 @@ int RunSimulate(const std::vector<std::string>& args) {
   spec.transition.atol = ParseNumber(vm["atol"].as<std::string>(), "--atol");
   spec.transition.max_steps = vm["max-steps"].as<long>();
   spec.transition.substeps = vm["substeps"].as<int>();
+  try {
+    spec.transition.input_hold = ParseInputHold(vm["input-hold"].as<std::string>());
+  } catch (const InputError& e) {
+    throw InputError(std::string("--input-hold: ") + e.what());
+  }
   std::string error;
   if (!spec.transition.IsValid(&error)) throw InputError(error);
   SetInput(vm, model, &spec);

@@ -57,7 +57,9 @@ class Ekf final : public FilterCommon<Model, Meas> {
 
   std::string Name() const override { return options_.iterations > 1 ? "iekf" : "ekf"; }
   void Initialize(const State& mean, const StateCov& cov) override { this->SetPrior(mean, cov); }
-  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
+  void SetInputPath(const InputOf<Model>& u0, const InputOf<Model>& u1) override {
+    transition_->SetInput(u0, u1);
+  }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
@@ -81,9 +83,8 @@ class Ekf final : public FilterCommon<Model, Meas> {
       return FailResult(ready, error_);
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status =
-        EkfUpdate<Model, Meas>(x_, P_, z, R, transition_->input(), params_, options_.iterations,
-                               &u, &why);
+    const FilterStatus status = EkfUpdate<Model, Meas>(x_, P_, z, R, transition_->input(), params_,
+                                                       options_.iterations, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);
@@ -92,7 +93,8 @@ class Ekf final : public FilterCommon<Model, Meas> {
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
     result.residual = WrapResidual<kM>(
-        z - MeasurementAndJacobian<Model, Meas>(x_, transition_->input(), params_, nullptr), Meas::kAngleOutputs);
+        z - MeasurementAndJacobian<Model, Meas>(x_, transition_->input(), params_, nullptr),
+        Meas::kAngleOutputs);
     return result;
   }
 

@@ -91,12 +91,15 @@ class Filter {
 
   // The input u: held over the next Predict, and seen by the next Update of
   // a measurement h(x, u) (the run loops set the input of row k before its
-  // update; zero-order hold keeps it over [t_k, t_k+1)). Filters with a
-  // Transition forward it to the transition (equivalent to
-  // transition->SetInput(u)); the LinearizedKf stores it. The default ignores
-  // it (models without input). InputOf<Model>: a double for models with at
-  // most one input.
-  virtual void SetInput(const InputOf<Model>& /*u*/) {}
+  // update; zero-order hold keeps it over [t_k, t_k+1)). InputOf<Model>: a
+  // double for models with at most one input.
+  void SetInput(const InputOf<Model>& u) { SetInputPath(u, u); }
+  // The input at the next Predict's start (u0, also seen by an Update
+  // before it) and end (u1): the prediction follows the line between them
+  // (linear hold, src/ode/input_path.h). Filters with a Transition forward
+  // both to it (transition->SetInput(u0, u1)); the LinearizedKf stores
+  // them. The default ignores them (models without input).
+  virtual void SetInputPath(const InputOf<Model>& /*u0*/, const InputOf<Model>& /*u1*/) {}
 
   virtual const State& mean() const = 0;
   virtual const StateCov& cov() const = 0;

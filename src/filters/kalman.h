@@ -17,10 +17,14 @@
 //   z ~= h(x*, u*) + H delta + D (u - u*),   H = dh/dx, D = dh/du at (x*, u*)
 // (D = 0 unless the measurement sees the input; u in the update is the input
 // at the measurement time, SetInput's last value).
-// Exact discretisation over dt (u held constant), by the exponential of the
-// augmented matrix
+// Exact discretisation over dt, by the exponential of the augmented matrix
 //   exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt) = [[Phi, Gamma, d], [0, I, 0], [0, 0, 1]]
-//   delta+ = Phi delta + Gamma (u - u*) + d.
+//   delta+ = Phi delta + Gamma (u - u*) + d            (u held: zero-order hold)
+// and, for a linear hold (u from u0 at t0 to u1 at t1, src/ode/input_path.h),
+// the first-order-hold exponential, with w' = 0, u' = w / dt:
+//   exp([[A, B, 0, c], [0, 0, I/dt, 0], [0, 0, 0, 0], [0, 0, 0, 0]] dt)
+//     = [[Phi, Gamma, Gamma1, d], ...],  Gamma1 = int_0^dt e^{A(dt-s)} B s/dt ds
+//   delta+ = Phi delta + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d.
 // A and H are exact (AD); B and D are fourth-order central differences (see
 // InputDerivative in linearize.h). The discretisation is cached for the last dt.
 // A discrete-time model (kDiscreteTime) is its own discretisation: its map
@@ -66,15 +70,14 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
 
   // Throws InputError for invalid options or an operating point of the wrong
   // length.
-  LinearizedKf(const Params& params, const KfOptions& options)
-      : params_(params) {
+  LinearizedKf(const Params& params, const KfOptions& options) : params_(params) {
     std::string error;
     if (!options.IsValid(&error)) throw InputError(error);
     const size_t inputs = options.operating_input.size();
     if (inputs != 0 && int(inputs) != kInputDim<Model>)
       throw InputError("operating input has " + std::to_string(inputs) + " values, model " +
                        Model::kName + " has " + std::to_string(kInputDim<Model>) + " inputs");
-    input_ = InputFrom<Model>(inputs ? options.operating_input.data() : nullptr);
+    input_ = input_end_ = InputFrom<Model>(inputs ? options.operating_input.data() : nullptr);
     lin_.u_star = InputColumn<Model>(input_);
     if (!options.operating_point.empty()) {
       if (int(options.operating_point.size()) != kN)
@@ -97,7 +100,10 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     }
   }
 
-  void SetInput(const InputOf<Model>& u) override { input_ = u; }
+  void SetInputPath(const InputOf<Model>& u0, const InputOf<Model>& u1) override {
+    input_ = u0;
+    input_end_ = u1;
+  }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     const double dt = t1 - t0;
@@ -106,11 +112,12 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       return Fail(FilterStatus::kNonFinite, "step t1 - t0 is negative or not finite");
     if (!linear_finite_)
       return Fail(FilterStatus::kNonFinite, "the linearisation (A, B, c, H) is not finite");
-    Discretize(dt);
-    // x- = x* + Phi wrap(x - x*) + Gamma (u - u*) + d,  P- = Phi P Phi^T + Q
+    Discretize(dt, !(input_ == input_end_));
+    // x- = x* + Phi wrap(x - x*) + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d,
+    // P- = Phi P Phi^T + Q
     State x_pred = x_;
     StateCov P_pred = P_;
-    KfPredict<Model, kM>(lin_, step_, input_, Q, &x_pred, &P_pred);
+    KfPredict<Model, kM>(lin_, step_, input_, input_end_, Q, &x_pred, &P_pred);
     if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
     this->SetPredicted(x_pred, P_pred, P_ * step_.phi.transpose());  // C = P Phi^T
@@ -151,6 +158,13 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   const Mat<kN, kU>& Gamma() const { return step_.gamma; }
   const Vec<double, kN>& d() const { return step_.drift; }
 
+  // The discretisation of the last Predict, for a step of dt: with Gamma1
+  // when with_ramp (the tuner's likelihood asks for a linear hold's).
+  const KfDiscretization<kN, kU>& DiscretizationFor(double dt, bool with_ramp) {
+    Discretize(dt, with_ramp);
+    return step_;
+  }
+
  private:
   // A = df/dx, B = df/du, c = f(x*, u*), h* = h(x*, u*), H = dh/dx and
   // D = dh/du at (x*, u*).
@@ -168,27 +182,48 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     cached_dt_ = -1.0;  // invalidate the discretisation cache
   }
 
-  // [[Phi, Gamma, d], [0, I, 0], [0, 0, 1]] = exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt),
-  // recomputed only when dt changes by more than 1e-12 relative.
-  void Discretize(double dt) {
-    if (cached_dt_ >= 0.0 && std::abs(dt - cached_dt_) <= 1e-12 * std::max(1.0, cached_dt_)) return;
+  // Phi, Gamma, d (and Gamma1 when with_ramp) of the header comment,
+  // recomputed only when dt changes by more than 1e-12 relative or Gamma1 is
+  // asked for the first time.
+  void Discretize(double dt, bool with_ramp) {
+    if (cached_dt_ >= 0.0 && std::abs(dt - cached_dt_) <= 1e-12 * std::max(1.0, cached_dt_) &&
+        (step_.with_ramp || !with_ramp))
+      return;
     if constexpr (kDiscreteTime<Model>) {
       // A step map: Phi = dStep/dx, Gamma = dStep/du, d = Step(x*, u*) - x*.
       step_.drift = StepMapJacobians<Model>(lin_.x_star, InputFrom<Model>(lin_.u_star.data()), dt,
                                             params_, &step_.phi, &step_.gamma) -
                     lin_.x_star;
+      step_.gamma1.setZero();  // the map sees u0 under either hold
+      step_.with_ramp = with_ramp;
       cached_dt_ = dt;
       return;
     }
-    constexpr int kA = kN + kU + 1;
-    Mat<kA, kA> augmented = Mat<kA, kA>::Zero();
-    augmented.template topLeftCorner<kN, kN>() = A_ * dt;
-    augmented.template block<kN, kU>(0, kN) = B_ * dt;
-    augmented.template block<kN, 1>(0, kN + kU) = c_ * dt;
-    const Mat<kA, kA> e = augmented.exp();
-    step_.phi = e.template topLeftCorner<kN, kN>();
-    step_.gamma = e.template block<kN, kU>(0, kN);
-    step_.drift = e.template block<kN, 1>(0, kN + kU);
+    if (with_ramp) {
+      constexpr int kA = kN + 2 * kU + 1;  // [x, u, w, 1]
+      Mat<kA, kA> augmented = Mat<kA, kA>::Zero();
+      augmented.template topLeftCorner<kN, kN>() = A_ * dt;
+      augmented.template block<kN, kU>(0, kN) = B_ * dt;
+      augmented.template block<kU, kU>(kN, kN + kU).setIdentity();  // (I / dt) dt
+      augmented.template block<kN, 1>(0, kN + 2 * kU) = c_ * dt;
+      const Mat<kA, kA> e = augmented.exp();
+      step_.phi = e.template topLeftCorner<kN, kN>();
+      step_.gamma = e.template block<kN, kU>(0, kN);
+      step_.gamma1 = e.template block<kN, kU>(0, kN + kU);
+      step_.drift = e.template block<kN, 1>(0, kN + 2 * kU);
+    } else {
+      constexpr int kA = kN + kU + 1;
+      Mat<kA, kA> augmented = Mat<kA, kA>::Zero();
+      augmented.template topLeftCorner<kN, kN>() = A_ * dt;
+      augmented.template block<kN, kU>(0, kN) = B_ * dt;
+      augmented.template block<kN, 1>(0, kN + kU) = c_ * dt;
+      const Mat<kA, kA> e = augmented.exp();
+      step_.phi = e.template topLeftCorner<kN, kN>();
+      step_.gamma = e.template block<kN, kU>(0, kN);
+      step_.gamma1.setZero();
+      step_.drift = e.template block<kN, 1>(0, kN + kU);
+    }
+    step_.with_ramp = with_ramp;
     cached_dt_ = dt;
   }
 
@@ -203,6 +238,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   bool linear_finite_ = false;
   KfLinearization<kN, kM, kU> lin_;  // x*, u*, h(x*, u*), H, D
   InputOf<Model> input_;
+  InputOf<Model> input_end_;  // at the next Predict's end (linear hold)
   Mat<kN, kN> A_ = Mat<kN, kN>::Zero();
   Mat<kN, kU> B_ = Mat<kN, kU>::Zero();
   Vec<double, kN> c_ = Vec<double, kN>::Zero();

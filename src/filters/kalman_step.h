@@ -5,8 +5,10 @@
 // depend on the noise. U: the number of input columns (kInputCols, one for
 // a model without input, whose u - u* is then 0).
 //
-// Predict (delta = wrap(x - x*), angle states wrapped):
-//   x- = x* + Phi delta + Gamma (u - u*) + d,   P- = Phi P Phi^T + Q
+// Predict (delta = wrap(x - x*), angle states wrapped; u0, u1 the inputs at
+// the step's ends, u1 = u0 under zero-order hold):
+//   x- = x* + Phi delta + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d,
+//   P- = Phi P Phi^T + Q
 // Update:
 //   z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
 //   S = H P- H^T + R,  K = P- H^T S^-1
@@ -31,12 +33,16 @@ struct KfLinearization {
   Mat<M, N> H = Mat<M, N>::Zero();                 // dh/dx at (x*, u*)
   Mat<M, U> D = Mat<M, U>::Zero();                 // dh/du at (x*, u*)
 };
-// Its exact discretisation over one step length.
+// Its exact discretisation over one step length. gamma1: the response to
+// an input ramping from 0 to 1 over the step (linear hold), with_ramp when
+// it was computed (else zero: only zero-order-hold steps may use it).
 template <int N, int U = 1>
 struct KfDiscretization {
   Mat<N, N> phi = Mat<N, N>::Identity();
   Mat<N, U> gamma = Mat<N, U>::Zero();
+  Mat<N, U> gamma1 = Mat<N, U>::Zero();
   Vec<double, N> drift = Vec<double, N>::Zero();
+  bool with_ramp = false;
 };
 
 // The input as a column of kInputCols<Model> values (a zero for a model
@@ -51,13 +57,16 @@ Vec<double, kInputCols<Model>> InputColumn(const InputOf<Model>& u) {
 template <class Model, int M, class T = double>
 void KfPredict(const KfLinearization<Model::kStateDim, M, kInputCols<Model>>& lin,
                const KfDiscretization<Model::kStateDim, kInputCols<Model>>& step,
-               const InputOf<Model>& u, const MatT<T, Model::kStateDim, Model::kStateDim>& Q,
-               Vec<T, Model::kStateDim>* x, MatT<T, Model::kStateDim, Model::kStateDim>* P) {
+               const InputOf<Model>& u0, const InputOf<Model>& u1,
+               const MatT<T, Model::kStateDim, Model::kStateDim>& Q, Vec<T, Model::kStateDim>* x,
+               MatT<T, Model::kStateDim, Model::kStateDim>* P) {
   constexpr int N = Model::kStateDim;
-  // delta = wrap(x - x*);  x- = x* + Phi delta + Gamma (u - u*) + d
+  // delta = wrap(x - x*);  x- = x* + Phi delta + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d
   const Vec<T, N> x_star = lin.x_star.template cast<T>();
   const Vec<T, N> delta = WrapResidual<N, T>(*x - x_star, Model::kAngleStates);
-  const Vec<double, N> forced = step.gamma * (InputColumn<Model>(u) - lin.u_star);
+  const Vec<double, kInputCols<Model>> c0 = InputColumn<Model>(u0);
+  Vec<double, N> forced = step.gamma * (c0 - lin.u_star);
+  if (step.with_ramp) forced += step.gamma1 * (InputColumn<Model>(u1) - c0);
   *x = x_star + step.phi.template cast<T>() * delta + forced.template cast<T>() +
        step.drift.template cast<T>();
   // P- = Phi P Phi^T + Q

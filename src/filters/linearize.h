@@ -64,7 +64,7 @@ auto InputDerivative(F&& f, const InputOf<Model>& u) {
   using Column = decltype(f(u));
   constexpr int R = Column::RowsAtCompileTime;
   Mat<R, kInputCols<Model>> D = Mat<R, kInputCols<Model>>::Zero();
-  if constexpr (kInputDim<Model> > 0) {
+  if constexpr (kInputDim<Model> >= 1) {
     for (int i = 0; i < kInputCols<Model>; ++i) {
       const double ui = InputComponent<Model>(u, i);
       const double h = 1e-3 * std::max(1.0, std::abs(ui));
@@ -73,8 +73,8 @@ auto InputDerivative(F&& f, const InputOf<Model>& u) {
         SetInputComponent<Model>(&w, i, v);
         return Column(f(w));
       };
-      D.col(i) = (at(ui - 2.0 * h) - 8.0 * at(ui - h) + 8.0 * at(ui + h) - at(ui + 2.0 * h)) /
-                 (12.0 * h);
+      D.col(i) =
+          (at(ui - 2.0 * h) - 8.0 * at(ui - h) + 8.0 * at(ui + h) - at(ui + 2.0 * h)) / (12.0 * h);
     }
   }
   return D;
@@ -133,9 +133,9 @@ Vec<T, Meas::kDim> MeasurementAndJacobian(
 // D = dh/du (x, u) of a measurement (zero for one that does not see the
 // input), by InputDerivative's central difference.
 template <class Model, class Meas>
-Mat<Meas::kDim, kInputCols<Model>> MeasurementInputJacobian(
-    const Vec<double, Model::kStateDim>& x, const InputOf<Model>& u,
-    const typename Model::Params& params) {
+Mat<Meas::kDim, kInputCols<Model>> MeasurementInputJacobian(const Vec<double, Model::kStateDim>& x,
+                                                            const InputOf<Model>& u,
+                                                            const typename Model::Params& params) {
   if constexpr (MeasurementSeesInput<Meas, Model>)
     return InputDerivative<Model>(
         [&](const InputOf<Model>& v) { return EvalMeasurement<Model, Meas, double>(x, v, params); },

@@ -108,7 +108,9 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   }
 
   std::string Name() const override { return "pf"; }
-  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
+  void SetInputPath(const InputOf<Model>& u0, const InputOf<Model>& u1) override {
+    transition_->SetInput(u0, u1);
+  }
 
   // Draws x_i = x0 + L0 e_i, L0 L0^T = P0 (P0 may be singular), uniform weights.
   void Initialize(const State& mean, const StateCov& cov) override {
@@ -250,9 +252,9 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     const InputOf<Model>& u = transition_->input();
     if constexpr (kPacketModel<Model>) {
       for (Eigen::Index first = 0; first < particles_.cols(); first += kPacketWidth)
-        ScatterColumns<kM>(EvalMeasurement<Model, Meas, Packet>(
-                               GatherColumns<kN>(particles_, first), u, params_),
-                           first, &predicted_measurements_);
+        ScatterColumns<kM>(
+            EvalMeasurement<Model, Meas, Packet>(GatherColumns<kN>(particles_, first), u, params_),
+            first, &predicted_measurements_);
     } else {
       for (Eigen::Index i = 0; i < particles_.cols(); ++i)
         predicted_measurements_.col(i) =

@@ -82,7 +82,9 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     this->SetPrior(mean, cov);
     have_propagated_ = false;
   }
-  void SetInput(const InputOf<Model>& u) override { transition_->SetInput(u); }
+  void SetInputPath(const InputOf<Model>& u0, const InputOf<Model>& u1) override {
+    transition_->SetInput(u0, u1);
+  }
 
   FilterStatus Predict(double t0, double t1, const StateCov& Q) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
@@ -120,9 +122,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     have_propagated_ = false;
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status =
-        SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z, R,
-                                 transition_->input(), params_, &u, &why);
+    const FilterStatus status = SigmaUpdate<Model, Meas>(
+        set_, Y, &measurement_points_, x_, P_, z, R, transition_->input(), params_, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);

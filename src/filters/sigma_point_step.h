@@ -81,8 +81,8 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
                          PointsT<T, Meas::kDim>* Z, const Vec<T, Model::kStateDim>& x_prior,
                          const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                          const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                         const InputOf<Model>& u, const Prm& params, GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out,
-                         std::string* why) {
+                         const InputOf<Model>& u, const Prm& params,
+                         GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   // Z_i = h(Y_i, u),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)

@@ -49,20 +49,16 @@
 #include <ceres/jet.h>
 #include <cvodes/cvodes.h>
 #include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
-#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <array>
-#include <cstdlib>
-#include <sstream>
 #include <string>
 #include <type_traits>
 
 #include "models/model_params.h"
 #include "src/core/types.h"
 #include "src/ode/autodiff.h"
+#include "src/ode/cvodes_solver.h"
+#include "src/ode/input_path.h"
 #include "src/ode/nested_jet.h"
 #include "src/ode/transition.h"
 
@@ -88,48 +84,47 @@ class CvodesThetaFlow {
     use_bdf_ = options.method == CvodesMethod::kBdf ||
                (options.method == CvodesMethod::kDefault && Model::kStiff);
   }
-  ~CvodesThetaFlow() {
-    for (Memory& m : memory_) m.Free();
-    if (ctx_ != nullptr) SUNContext_Free(&ctx_);
-  }
+  ~CvodesThetaFlow() = default;
   CvodesThetaFlow(const CvodesThetaFlow&) = delete;
   CvodesThetaFlow& operator=(const CvodesThetaFlow&) = delete;
 
   // CVODES internal steps taken by every Propagate so far.
   long steps() const { return steps_; }
 
-  // x(t1) from x(t0) = x under constant input u and parameters p (Params, or
-  // ParamsT<J> when physical parameters are differentiated); F = dx(t1)/dx(t0)
-  // when F is not null.
+  // x(t1) from x(t0) = x under the input u (held, or a line: input_path.h) and parameters p
+  // (Params, or ParamsT<J> when physical parameters are differentiated); F = dx(t1)/dx(t0) when F
+  // is not null.
   template <class P>
-  StateJ Propagate(const StateJ& x, double t0, double t1, const InputOf<Model>& u, const P& p,
+  StateJ Propagate(const StateJ& x, double t0, double t1, const InputPath<Model>& u, const P& p,
                    JacobianJ* F) {
     with_jacobian_ = F != nullptr;
-    Memory& m = memory_[with_jacobian_ ? 1 : 0];
-    if (m.mem == nullptr) Create(&m, with_jacobian_ ? kN + kN * kN : kN);
+    CvodesSolver& m = memory_[with_jacobian_ ? 1 : 0];
+    if (!m.built()) Create(&m, with_jacobian_ ? kN + kN * kN : kN);
+    void* const mem = m.mem();
+    const N_Vector y = m.y();
+    N_Vector* const yS = m.yS();
     params_ = &p;
     input_ = u;
     rhs_ = &RhsFor<P>;
     sens_rhs_ = &SensRhsFor<P>;
     // z(t0) = [x; vec I], s_i(t0) = [dx/dtheta_i; 0].
-    N_VConst(0.0, m.y);
-    for (int k = 0; k < kN; ++k) NV_Ith_S(m.y, k) = x(k).a;
+    N_VConst(0.0, y);
+    for (int k = 0; k < kN; ++k) NV_Ith_S(y, k) = x(k).a;
     if (with_jacobian_)
-      for (int k = 0; k < kN; ++k) NV_Ith_S(m.y, kN + k * kN + k) = 1.0;
+      for (int k = 0; k < kN; ++k) NV_Ith_S(y, kN + k * kN + k) = 1.0;
     for (int i = 0; i < C; ++i) {
-      N_VConst(0.0, m.yS[i]);
-      for (int k = 0; k < kN; ++k) NV_Ith_S(m.yS[i], k) = x(k).v(i);
+      N_VConst(0.0, yS[i]);
+      for (int k = 0; k < kN; ++k) NV_Ith_S(yS[i], k) = x(k).v(i);
     }
-    Check(CVodeReInit(m.mem, t0, m.y), "CVodeReInit");
-    Check(CVodeSensReInit(m.mem, CV_SIMULTANEOUS, m.yS), "CVodeSensReInit");
-    Check(CVodeSetStopTime(m.mem, t1), "CVodeSetStopTime");
-    callback_error_.clear();
+    Check(CVodeReInit(mem, t0, y), "CVodeReInit");
+    Check(CVodeSensReInit(mem, CV_SIMULTANEOUS, yS), "CVodeSensReInit");
+    Check(CVodeSetStopTime(mem, t1), "CVodeSetStopTime");
+    m.ClearError();
     sunrealtype t_reached = t0;
-    const int flag = CVode(m.mem, t1, m.y, &t_reached, CV_NORMAL);
-    long steps = 0;  // since the ReInit above
-    if (CVodeGetNumSteps(m.mem, &steps) == CV_SUCCESS) steps_ += steps;
-    if (flag < 0) Fail(flag, t0, t1, t_reached);
-    Check(CVodeGetSens(m.mem, &t_reached, m.yS), "CVodeGetSens");
+    const int flag = CVode(mem, t1, y, &t_reached, CV_NORMAL);
+    steps_ += m.NumSteps();  // since the ReInit above
+    if (flag < 0) m.Fail(flag, "CVODES (sensitivities in theta)", t0, t1, t_reached);
+    Check(CVodeGetSens(mem, &t_reached, yS), "CVodeGetSens");
     StateJ x1;
     for (int k = 0; k < kN; ++k) x1(k) = Load(m, k);
     if (F != nullptr)
@@ -139,66 +134,33 @@ class CvodesThetaFlow {
   }
 
  private:
-  // One CVODES memory per size of z (n, or n + n^2 with F).
-  struct Memory {
-    void* mem = nullptr;
-    N_Vector y = nullptr;
-    N_Vector* yS = nullptr;
-    SUNNonlinearSolver nls = nullptr, nls_sens = nullptr;
-    SUNMatrix A = nullptr;
-    SUNLinearSolver linear_solver = nullptr;
-    void Free() {
-      if (yS != nullptr) N_VDestroyVectorArray(yS, C);
-      if (mem != nullptr) CVodeFree(&mem);
-      if (nls != nullptr) SUNNonlinSolFree(nls);
-      if (nls_sens != nullptr) SUNNonlinSolFree(nls_sens);
-      if (linear_solver != nullptr) SUNLinSolFree(linear_solver);
-      if (A != nullptr) SUNMatDestroy(A);
-      if (y != nullptr) N_VDestroy(y);
-      *this = Memory();
-    }
-  };
-
-  void Create(Memory* m, int size) {
-    if (ctx_ == nullptr) Check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
-    m->y = N_VNew_Serial(size, ctx_);
-    if (m->y == nullptr) throw NumericalError("N_VNew_Serial failed");
-    N_VConst(0.0, m->y);
-    m->mem = CVodeCreate(use_bdf_ ? CV_BDF : CV_ADAMS, ctx_);
-    if (m->mem == nullptr) throw NumericalError("CVodeCreate failed");
-    Check(CVodeInit(m->mem, &Rhs, 0.0, m->y), "CVodeInit");
-    Check(CVodeSStolerances(m->mem, options_.rtol, options_.atol), "CVodeSStolerances");
-    Check(CVodeSetUserData(m->mem, this), "CVodeSetUserData");
-    Check(CVodeSetErrHandlerFn(m->mem, &ErrorHandler, this), "CVodeSetErrHandlerFn");
-    Check(CVodeSetMaxNumSteps(m->mem, options_.max_steps), "CVodeSetMaxNumSteps");
-    if (!use_bdf_ && !Model::kStiff) {
-      m->nls = SUNNonlinSol_FixedPoint(m->y, 0, ctx_);
-      if (m->nls == nullptr) throw NumericalError("SUNNonlinSol_FixedPoint failed");
-      Check(CVodeSetNonlinearSolver(m->mem, m->nls), "CVodeSetNonlinearSolver");
-    } else {
-      m->A = SUNDenseMatrix(size, size, ctx_);
-      m->linear_solver = SUNLinSol_Dense(m->y, m->A, ctx_);
-      if (m->A == nullptr || m->linear_solver == nullptr)
-        throw NumericalError("SUNLinSol_Dense failed");
-      Check(CVodeSetLinearSolver(m->mem, m->linear_solver, m->A), "CVodeSetLinearSolver");
-    }
-    m->yS = N_VCloneVectorArray(C, m->y);
-    if (m->yS == nullptr) throw NumericalError("N_VCloneVectorArray failed");
-    for (int i = 0; i < C; ++i) N_VConst(0.0, m->yS[i]);
-    Check(CVodeSensInit(m->mem, C, CV_SIMULTANEOUS, &SensRhs, m->yS), "CVodeSensInit");
-    Check(CVodeSensEEtolerances(m->mem), "CVodeSensEEtolerances");
-    Check(CVodeSetSensErrCon(m->mem, SUNTRUE), "CVodeSetSensErrCon");
-    if (m->nls != nullptr) {
-      m->nls_sens = SUNNonlinSol_FixedPointSens(C + 1, m->y, 0, ctx_);
-      if (m->nls_sens == nullptr) throw NumericalError("SUNNonlinSol_FixedPointSens failed");
-      Check(CVodeSetNonlinearSolverSensSim(m->mem, m->nls_sens), "CVodeSetNonlinearSolverSensSim");
+  // The solver for z of `size` components (n, or n + n^2 with F), with C
+  // sensitivities. Stiff models: BDF, Newton and CVODES' difference-quotient
+  // Jacobian of g; the others Adams with the fixed-point correctors.
+  void Create(CvodesSolver* m, int size) {
+    CvodesSetup setup;
+    setup.size = size;
+    setup.bdf = use_bdf_;
+    setup.fixed_point = !use_bdf_ && !Model::kStiff;
+    setup.rtol = options_.rtol;
+    setup.atol = options_.atol;
+    setup.max_steps = options_.max_steps;
+    setup.rhs = &Rhs;
+    setup.user_data = this;
+    setup.sensitivities = C;
+    m->Build(setup);
+    try {
+      m->StartSensitivities(&SensRhs);
+    } catch (...) {
+      m->Free();  // not a whole solver: the next call builds it again
+      throw;
     }
   }
 
   // Component k of z as a Jet: value y_k, derivatives s_i,k.
-  static J Load(const Memory& m, int k) {
-    J v(NV_Ith_S(m.y, k));
-    for (int i = 0; i < C; ++i) v.v(i) = NV_Ith_S(m.yS[i], k);
+  static J Load(const CvodesSolver& m, int k) {
+    J v(NV_Ith_S(m.y(), k));
+    for (int i = 0; i < C; ++i) v.v(i) = NV_Ith_S(m.yS()[i], k);
     return v;
   }
 
@@ -219,7 +181,7 @@ class CvodesThetaFlow {
   template <class P>
   static int RhsFor(CvodesThetaFlow* self, double t, N_Vector y, N_Vector ydot) {
     const typename Model::Params p = Values(*static_cast<const P*>(self->params_));
-    const InputOf<Model>& u = self->input_;
+    const InputOf<Model> u = self->input_.At(t);
     Vec<double, kN> x;
     for (int k = 0; k < kN; ++k) x(k) = NV_Ith_S(y, k);
     if (!self->with_jacobian_) {
@@ -248,7 +210,7 @@ class CvodesThetaFlow {
   static int SensRhsFor(CvodesThetaFlow* self, double t, N_Vector y, N_Vector* yS,
                         N_Vector* ySdot) {
     const P& p = *static_cast<const P*>(self->params_);
-    const InputOf<Model>& u = self->input_;
+    const InputOf<Model> u = self->input_.At(t);
     auto jet = [&](int k) {
       J v(NV_Ith_S(y, k));
       for (int i = 0; i < C; ++i) v.v(i) = NV_Ith_S(yS[i], k);
@@ -291,40 +253,18 @@ class CvodesThetaFlow {
     auto* self = static_cast<CvodesThetaFlow*>(user_data);
     return self->sens_rhs_(self, t, y, yS, ySdot);
   }
-  static void ErrorHandler(int /*error_code*/, const char* /*module*/, const char* function,
-                           char* msg, void* user_data) {
-    static_cast<CvodesThetaFlow*>(user_data)->callback_error_ = std::string(function) + ": " + msg;
-  }
-
-  [[noreturn]] void Fail(int flag, double t0, double t1, double t_reached) const {
-    std::ostringstream msg;
-    msg << "CVODES (sensitivities in theta) failed at t = " << t_reached
-        << " while stepping from t = " << t0 << " to t = " << t1 << ": ";
-    char* flag_name = CVodeGetReturnFlagName(flag);  // malloc'd, the caller frees
-    msg << (flag_name != nullptr ? flag_name : "unknown CVODES flag");
-    std::free(flag_name);
-    if (!callback_error_.empty()) msg << " (" << callback_error_ << ")";
-    throw NumericalError(msg.str());
-  }
-  static void Check(int flag, const char* call) {
-    if (flag < 0) {
-      throw NumericalError(std::string("CVODES call ") + call + " failed with flag " +
-                           std::to_string(flag));
-    }
-  }
+  static void Check(int flag, const char* call) { CvodesSolver::Check(flag, call); }
 
   TransitionOptions options_;
   long steps_ = 0;
   bool use_bdf_ = false;
-  SUNContext ctx_ = nullptr;
-  std::array<Memory, 2> memory_;  // [0]: z = x, [1]: z = [x; vec S]
+  std::array<CvodesSolver, 2> memory_;  // [0]: z = x, [1]: z = [x; vec S]
   // The current call's inputs, read by the callbacks.
   bool with_jacobian_ = false;
   const void* params_ = nullptr;
-  InputOf<Model> input_ = InputFrom<Model>(nullptr);
+  InputPath<Model> input_;  // over the running Propagate
   int (*rhs_)(CvodesThetaFlow*, double, N_Vector, N_Vector) = nullptr;
   int (*sens_rhs_)(CvodesThetaFlow*, double, N_Vector, N_Vector*, N_Vector*) = nullptr;
-  std::string callback_error_;
 };
 
 }  // namespace estlab

@@ -8,10 +8,15 @@
 //   rk4:                 classical fourth-order Runge-Kutta
 //   discrete:            a discrete-time model's own map, x+ = Step(t, x, h, u)
 //                        (models with kDiscreteTime; the only scheme they take)
+// u: the input over the step (src/ode/input_path.h), evaluated where each
+// scheme evaluates f: u(t) for Euler, u(t + h/2) and u(t + h) too for RK4.
+// A held input (every zoh step) is u0 at every stage; a discrete-time map
+// sees u0.
 #ifndef ESTLAB_ODE_FIXED_STEP_H_
 #define ESTLAB_ODE_FIXED_STEP_H_
 
 #include "src/core/types.h"
+#include "src/ode/input_path.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -20,31 +25,35 @@ namespace estlab {
 // (models/model_params.h).
 template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kStateDim>& x, double t,
-                                   double h, const InputOf<Model>& u, const Prm& p) {
+                                   double h, const InputPath<Model>& u, const Prm& p) {
   using State = Vec<T, Model::kStateDim>;
   const T tt(t);
   if constexpr (kDiscreteTime<Model>) {
-    return Model::template Step<T>(tt, x, h, u, p);  // MakeTransition admits kDiscrete only
+    // The map sees the sample at the step's start under either hold (its
+    // substeps too): a discrete-time model has no input between samples.
+    return Model::template Step<T>(tt, x, h, u.u0, p);  // MakeTransition admits kDiscrete only
   } else {
+    const InputOf<Model> u_t = u.At(t);
     switch (scheme) {
       case Integrator::kEuler:
-        return x + h * Model::Rhs(tt, x, u, p);
+        return x + h * Model::Rhs(tt, x, u_t, p);
       case Integrator::kSemiImplicitEuler: {
-        const State f = Model::Rhs(tt, x, u, p);
+        const State f = Model::Rhs(tt, x, u_t, p);
         State next = x;
         for (const auto& [pos, rate] : Model::kPositionRatePairs)
           next(rate) = x(rate) + h * f(rate);
-        const State g = Model::Rhs(tt, next, u, p);
+        const State g = Model::Rhs(tt, next, u_t, p);
         for (const auto& [pos, rate] : Model::kPositionRatePairs) next(pos) = x(pos) + h * g(pos);
         return next;
       }
       case Integrator::kRk4:
       default: {
         const T half(t + 0.5 * h), full(t + h);
-        const State k1 = Model::Rhs(tt, x, u, p);
-        const State k2 = Model::Rhs(half, State(x + (0.5 * h) * k1), u, p);
-        const State k3 = Model::Rhs(half, State(x + (0.5 * h) * k2), u, p);
-        const State k4 = Model::Rhs(full, State(x + h * k3), u, p);
+        const InputOf<Model> u_half = u.At(t + 0.5 * h), u_full = u.At(t + h);
+        const State k1 = Model::Rhs(tt, x, u_t, p);
+        const State k2 = Model::Rhs(half, State(x + (0.5 * h) * k1), u_half, p);
+        const State k3 = Model::Rhs(half, State(x + (0.5 * h) * k2), u_half, p);
+        const State k4 = Model::Rhs(full, State(x + h * k3), u_full, p);
         return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
       }
     }
@@ -68,8 +77,7 @@ inline int RhsEvalsPerStep(Integrator scheme) {
 template <class Model, class T, class Prm = typename Model::Params>
 Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::kStateDim>& x0,
                                         double t0, double t1, int substeps,
-                                        const InputOf<Model>& u,
-                                        const Prm& p) {
+                                        const InputPath<Model>& u, const Prm& p) {
   const double h = (t1 - t0) / substeps;
   Vec<T, Model::kStateDim> x = x0;
   for (int i = 0; i < substeps; ++i) x = FixedStep<Model, T, Prm>(scheme, x, t0 + i * h, h, u, p);

@@ -47,7 +47,8 @@ void ScatterColumns(const Vec<Packet, N>& x, Eigen::Index first,
 template <class Model, class Prm>
 void FixedPropagatePoints(Integrator scheme,
                           const Eigen::Matrix<double, Model::kStateDim, Eigen::Dynamic>& points,
-                          double t0, double t1, int substeps, const InputOf<Model>& u, const Prm& p,
+                          double t0, double t1, int substeps, const InputPath<Model>& u,
+                          const Prm& p,
                           Eigen::Matrix<double, Model::kStateDim, Eigen::Dynamic>* out) {
   constexpr int kN = Model::kStateDim;
   for (Eigen::Index first = 0; first < points.cols(); first += kPacketWidth) {

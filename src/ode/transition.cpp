@@ -45,6 +45,14 @@ std::string CheckIntegratorForModel(Integrator integrator, bool discrete_time,
   return "";
 }
 
+InputHold ParseInputHold(const std::string& name) {
+  if (name == "zoh") return InputHold::kZoh;
+  if (name == "linear") return InputHold::kLinear;
+  throw InputError("unknown input hold '" + name + "' (expected zoh or linear)");
+}
+
+const char* InputHoldName(InputHold hold) { return hold == InputHold::kLinear ? "linear" : "zoh"; }
+
 bool TransitionOptions::IsValid(std::string* error) const {
   auto fail = [&](const std::string& what) {
     if (error != nullptr) *error = what;

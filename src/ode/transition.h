@@ -21,6 +21,7 @@
 
 #include "models/model.h"
 #include "src/core/types.h"
+#include "src/ode/input_path.h"
 
 namespace estlab {
 
@@ -49,6 +50,10 @@ struct TransitionOptions {
   double rtol = 1e-10;
   double atol = 1e-12;
   long max_steps = 500000;
+  // How recorded inputs are held between samples (src/ode/input_path.h).
+  // The run loops and the simulator read it; a Transition follows the two
+  // ends SetInput gives it.
+  InputHold input_hold = InputHold::kZoh;
 
   bool IsValid(std::string* error) const;
 };
@@ -70,7 +75,7 @@ class Transition {
   explicit Transition(const Params& params) : params_(params) {}
   virtual ~Transition() = default;
 
-  // x(t1) from x(t0) with the input held at the value of SetInput.
+  // x(t1) from x(t0) with the input SetInput gave (held, or its line).
   virtual State Step(const State& x, double t0, double t1) = 0;
   // Same, and *flow_jacobian = dx(t1)/dx(t0).
   virtual State StepWithJacobian(const State& x, double t0, double t1, Jacobian* flow_jacobian) = 0;
@@ -95,14 +100,29 @@ class Transition {
   }
 
   using Input = InputOf<Model>;  // double for models with at most one input
-  void SetInput(const Input& u) { input_ = u; }
+  // The input held over the next Step (and seen by h(x, u)).
+  void SetInput(const Input& u) { input_ = input_end_ = u; }
+  // The input at the next Step's start (u0) and end (u1): the Step follows
+  // the line between them (linear hold; u1 = u0 is SetInput(u0)).
+  void SetInput(const Input& u0, const Input& u1) {
+    input_ = u0;
+    input_end_ = u1;
+  }
+  // The input at the step's start (and of the measurement at that time).
   const Input& input() const { return input_; }
+  const Input& input_end() const { return input_end_; }
   const Params& params() const { return params_; }
   const TransitionStats& stats() const { return stats_; }
 
  protected:
+  // The input over [t0, t1] (src/ode/input_path.h).
+  InputPath<Model> Path(double t0, double t1) const {
+    return InputPath<Model>(input_, input_end_, t0, t1);
+  }
+
   Params params_;
   Input input_ = InputFrom<Model>(nullptr);
+  Input input_end_ = InputFrom<Model>(nullptr);
   TransitionStats stats_;
 };
 

@@ -31,12 +31,12 @@ class FixedStepTransition final : public Transition<Model> {
 
   State Step(const State& x, double t0, double t1) override {
     Count(false);
-    return FixedPropagate<Model, double>(scheme_, x, t0, t1, substeps_, this->input_,
+    return FixedPropagate<Model, double>(scheme_, x, t0, t1, substeps_, this->Path(t0, t1),
                                          this->params_);
   }
   State StepWithJacobian(const State& x, double t0, double t1, Jacobian* F) override {
     Count(true);
-    const InputOf<Model>& u = this->input_;
+    const InputPath<Model> u = this->Path(t0, t1);
     const Params& p = this->params_;
     return ValueAndJacobian<kN, kN>(
         [&](const auto& xj) {
@@ -49,7 +49,7 @@ class FixedStepTransition final : public Transition<Model> {
   void StepPoints(const Points& points, double t0, double t1, Points* out) override {
     const Eigen::Index count = points.cols();
     CountPoints(count);
-    const InputOf<Model>& u = this->input_;
+    const InputPath<Model> u = this->Path(t0, t1);
     const Params& p = this->params_;
     for (Eigen::Index i = 0; i < count; ++i)
       out->col(i) =
@@ -58,7 +58,8 @@ class FixedStepTransition final : public Transition<Model> {
   void StepCloud(const Points& points, double t0, double t1, Points* out) override {
     if constexpr (kPacketModel<Model>) {
       CountPoints(points.cols());
-      FixedPropagatePoints<Model>(scheme_, points, t0, t1, substeps_, this->input_, this->params_,
+      FixedPropagatePoints<Model>(scheme_, points, t0, t1, substeps_, this->Path(t0, t1),
+                                  this->params_,
                                   out);  // kPacketWidth points per model call
     } else {
       StepPoints(points, t0, t1, out);

@@ -56,6 +56,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"ess-threshold", "0.5", "pf: resample when ESS < threshold * N (1 = every step)"},
       {"seed", "1", "random seed (pf: the particles; tune: the multi-start points)", K::kValue, false, true},
       {"input", "0", "constant input, for data without the input's column (else that column, held between samples); a model with several inputs takes one value each, comma-separated", K::kValue, false, true},
+      {"input-hold", "zoh", "how the input is held between samples: zoh (u_k over [t_k, t_k+1)) | linear (the line from u_k to u_k+1); every process model, CVODES included, stops at the samples", K::kValue, false, true},
       {"column", nullptr, "map a column: ours=[a*]theirs[+-b] (ours = a theirs + b; a, b numbers or pi), e.g. z_theta=angle_rad, theta=angle-pi, theta=0.0174533*angle_deg", K::kRepeatable, false, true},
       {"full-cov", nullptr, "write every covariance entry, not only the diagonal", K::kFlag, false, true},
   };
@@ -154,6 +155,7 @@ void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions*
   const std::string error = model.CheckIntegrator(t->integrator);
   if (!error.empty()) throw KeyError("integrator", error);
   t->substeps = r.Count("substeps", 0, 100000);
+  t->input_hold = ForKey("input-hold", [&] { return ParseInputHold(r.Text("input-hold")); });
   const std::string method = r.Text("method");
   if (method == "bdf")
     t->method = CvodesMethod::kBdf;

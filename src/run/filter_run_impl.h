@@ -255,8 +255,7 @@ template <class Model, class Meas>
 void SmoothRecords(const FilterData& data, const RowLayout& layout,
                    SmootherRecorder<Model, Meas>* smoother,
                    std::vector<RowRecord<Model::kStateDim, Meas::kDim>>* records,
-                   FilterRunOutput* out,
-                   std::vector<SmoothedMoments<Model::kStateDim>>* moments) {
+                   FilterRunOutput* out, std::vector<SmoothedMoments<Model::kStateDim>>* moments) {
   using StateCov = Mat<Model::kStateDim, Model::kStateDim>;
   FilterSummary& s = out->summary;
   auto forward = std::make_shared<FilterSummary>(s);
@@ -285,8 +284,8 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
     moments->reserve(records->size());
     for (const auto& r : *records) {
       const StateCov* L = smoother->lag_one(r.step);
-      moments->push_back({r.x, r.P,
-                          L ? *L : StateCov::Constant(std::numeric_limits<double>::quiet_NaN())});
+      moments->push_back(
+          {r.x, r.P, L ? *L : StateCov::Constant(std::numeric_limits<double>::quiet_NaN())});
     }
   }
   EmitRows<Model, Meas>(
@@ -344,8 +343,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
                 std::to_string(k < data.lines.size() ? data.lines[k] : 0) + "): " + what;
     return false;
   };
-  auto predict = [&](size_t k, double t0, double t1, const double* u) {
-    filter->SetInput(InputFrom<Model>(u));
+  auto predict = [&](size_t k, double t0, double t1, const double* u0, const double* u1) {
+    filter->SetInputPath(InputFrom<Model>(u0), InputFrom<Model>(u1));
     if (spec.q_white_accel && !q_adapted) Q = WhiteAccelQ<Model>(spec.qc, t1 - t0);
     std::string why;
     if (smoother && !smoother->BeforePredict(t0, t1, Q, &why)) return fail(k, why);

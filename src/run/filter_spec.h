@@ -67,8 +67,8 @@ struct FilterData {
   std::vector<double> z;  // rows x m, NaN = missing (no update)
   bool has_truth = false;
   std::vector<double> truth;  // rows x n
-  int nu = 0;              // input columns (0: none, the spec's constant input)
-  std::vector<double> u;  // rows x nu: u_k held over [t_k, t_k+1)
+  int nu = 0;                 // input columns (0: none, the spec's constant input)
+  std::vector<double> u;      // rows x nu: u_k held over [t_k, t_k+1)
 };
 
 struct FilterSummary {

@@ -3,9 +3,12 @@
 // (adaptive/likelihood.h) all step through a dataset with it.
 //
 // For each row k at time t_k (t_{-1} = spec.t0 when given, else t_0):
-//   if t_k > t_{k-1}: predict from t_{k-1} to t_k with the input u_{k-1}
-//                     held over the step (zero-order hold; row 0's input
-//                     before the first row)
+//   if t_k > t_{k-1}: predict from t_{k-1} to t_k with the input u0 = u_{k-1}
+//                     at its start and u1 at its end: u1 = u_{k-1} under
+//                     zero-order hold (held over the step), u1 = u_k under
+//                     spec.transition.input_hold = linear (the line between
+//                     the samples, src/ode/input_path.h); row 0's input
+//                     before the first row
 //   then visit the row with z_k, or with no measurement when any component
 //   of z_k is missing (NaN): no update then; with the input u_k, which a
 //   measurement h(x, u) sees.
@@ -17,7 +20,9 @@
 // Usage:
 //   const bool completed = ForEachStep<M>(
 //       spec, data,
-//       [&](size_t k, double t0, double t1, const double* u) { return Predict(...); },
+//       [&](size_t k, double t0, double t1, const double* u0, const double* u1) {
+//         return Predict(...);
+//       },
 //       [&](size_t k, const Vec<double, M>* z, const double* u) { return z ? Update(*z) : true; });
 #ifndef ESTLAB_RUN_STEP_LOOP_H_
 #define ESTLAB_RUN_STEP_LOOP_H_
@@ -34,7 +39,8 @@ namespace estlab {
 
 // Row k's input: its nu input cells, else spec.input (null when empty).
 inline const double* InputAtRow(const FilterSpec& spec, const FilterData& data, size_t k) {
-  if (data.nu > 0) return (k + 1) * size_t(data.nu) <= data.u.size() ? &data.u[k * size_t(data.nu)] : nullptr;
+  if (data.nu > 0)
+    return (k + 1) * size_t(data.nu) <= data.u.size() ? &data.u[k * size_t(data.nu)] : nullptr;
   return spec.input.empty() ? nullptr : spec.input.data();
 }
 
@@ -55,11 +61,13 @@ inline std::string CheckInputWidths(const FilterSpec& spec, const FilterData& da
 template <int M, class PredictFn, class RowFn>
 bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& predict, RowFn&& row) {
   const size_t rows = data.t.size();
+  const bool linear = spec.transition.input_hold == InputHold::kLinear;
   double t_prev = spec.has_t0 ? spec.t0 : (rows ? data.t[0] : 0.0);
   for (size_t k = 0; k < rows; ++k) {
     const double t = data.t[k];
     if (t > t_prev) {
-      if (!predict(k, t_prev, t, InputAtRow(spec, data, k > 0 ? k - 1 : 0))) return false;
+      const double* u0 = InputAtRow(spec, data, k > 0 ? k - 1 : 0);
+      if (!predict(k, t_prev, t, u0, linear ? InputAtRow(spec, data, k) : u0)) return false;
     }
     t_prev = t;
     Vec<double, M> z;

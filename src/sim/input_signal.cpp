@@ -260,4 +260,36 @@ InputSignal ParseInputSignal(const std::string& text, const std::string& what,
                    "' (expected a number, multisine(...), prbs(...), steps(...) or file(...))");
 }
 
+std::vector<InputSignal> ParseInputSignals(const std::string& text, const std::string& what,
+                                           const std::vector<std::string>& names,
+                                           const std::string& base_dir) {
+  std::vector<std::string> items(1);
+  int depth = 0;
+  for (char c : text) {
+    depth += c == '(' ? 1 : c == ')' ? -1 : 0;
+    if (c == ',' && depth == 0)
+      items.emplace_back();
+    else
+      items.back() += c;
+  }
+  if (items.size() != names.size()) {
+    std::string order;
+    for (const std::string& n : names) {
+      if (!order.empty()) order += ", ";
+      order += n;
+    }
+    throw InputError(what + ": " + std::to_string(items.size()) + " item(s) for " +
+                     std::to_string(names.size()) +
+                     " inputs (one constant or signal per input, comma-separated, in the order " +
+                     order + ")");
+  }
+  std::vector<InputSignal> signals;
+  for (size_t i = 0; i < items.size(); ++i) {
+    const std::string where = names.size() > 1 ? what + " (input " + names[i] + ")" : what;
+    if (Trim(items[i]).empty()) throw InputError(where + ": empty item");
+    signals.push_back(ParseInputSignal(items[i], where, base_dir));
+  }
+  return signals;
+}
+
 }  // namespace estlab

@@ -1,7 +1,8 @@
 // Seeded input signals for simulated experiments: what a study scenario's
 // `input = ...` may be besides a constant (docs/studies.md, "Inputs").
 // Sampled at the measurement times; the simulation and every filter hold
-// each sample until the next (zero-order hold, src/sim/simulation.h).
+// each sample until the next (zero-order hold) or follow the line between
+// them (--input-hold linear, src/ode/input_path.h).
 //
 //   2.5                            a constant
 //   multisine(rms=0.5, mean=0, band=0.001:0.05, sines=10, seed=1)
@@ -49,11 +50,11 @@ namespace estlab {
 struct InputSignal {
   enum Kind { kConstant, kMultisine, kPrbs, kSteps, kRecorded };
   Kind kind = kConstant;
-  double mean = 0.0;                  // constant: the value
-  double scale = 0.0;                 // multisine: rms; prbs: amplitude
-  std::vector<double> freqs, phases;  // multisine
-  double period = 1.0;                // prbs
-  std::vector<bool> bits;             // prbs: one period of the sequence
+  double mean = 0.0;                             // constant: the value
+  double scale = 0.0;                            // multisine: rms; prbs: amplitude
+  std::vector<double> freqs, phases;             // multisine
+  double period = 1.0;                           // prbs
+  std::vector<bool> bits;                        // prbs: one period of the sequence
   std::vector<std::pair<double, double>> steps;  // (time, value) after the first value;
                                                  // recorded: every row (time, value)
   std::string path;                              // recorded: the file read
@@ -69,6 +70,17 @@ struct InputSignal {
 // file(...) paths are relative to base_dir (the working folder when empty).
 InputSignal ParseInputSignal(const std::string& text, const std::string& what,
                              const std::string& base_dir = "");
+
+// One signal per input of a model with inputs `names`: `text` is a list
+// split at its top-level commas (a comma inside a signal's parentheses
+// belongs to the signal), item i for input i. "1.5, 0" is two constants;
+// "multisine(rms=1, band=0.01:0.1, seed=1), prbs(amplitude=2, seed=2)" two
+// signals (give each its own seed: two multisines with the same seed have
+// the same phases). Throws InputError naming the count, or the input whose
+// item is wrong ("<what> (input F): ...").
+std::vector<InputSignal> ParseInputSignals(const std::string& text, const std::string& what,
+                                           const std::vector<std::string>& names,
+                                           const std::string& base_dir = "");
 
 // One period of the maximum-length sequence of an order-bit Galois LFSR
 // (2 <= order <= 20) from the start state mod 2^order (0 taken as 1).

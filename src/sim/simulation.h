@@ -26,9 +26,9 @@ struct SimulationSpec {
   // simulation): when not empty, rows are written at these times (the first
   // is x0's time) instead of k dt, and t_end and dt are not used. `inputs`
   // (empty, or one row of nu values per time, row-major) is held over
-  // [times[k], times[k+1]) (zero-order
-  // hold: a model's input is piecewise constant between samples, and CVODES
-  // restarts at every sample where it changes).
+  // [times[k], times[k+1]) (transition.input_hold = zoh: piecewise constant
+  // between samples), or follows the line between the samples (linear);
+  // CVODES restarts at every sample where the input changes or bends.
   std::vector<double> times;
   std::vector<double> inputs;
   // When not empty, columns of these names (one per model input) after the

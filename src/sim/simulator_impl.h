@@ -135,7 +135,11 @@ SimulationResult Simulate(const SimulationSpec& spec) {
   for (size_t k = 0; k + 1 < times.size(); ++k) {
     const double t0 = times[k], t1 = times[k + 1];
     try {
-      transition->SetInput(InputFrom<Model>(InputAt(spec, k, nu)));
+      // u_k held over [t_k, t_k+1), or the line to u_k+1 (linear hold).
+      const InputOf<Model> u_k = InputFrom<Model>(InputAt(spec, k, nu));
+      transition->SetInput(u_k, spec.transition.input_hold == InputHold::kLinear
+                                    ? InputFrom<Model>(InputAt(spec, k + 1, nu))
+                                    : u_k);
       if (t1 > t0) x = transition->Step(x, t0, t1);
     } catch (const NumericalError& e) {
       result.ok = false;

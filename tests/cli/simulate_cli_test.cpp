@@ -36,6 +36,8 @@ std::vector<BadInputCase> BadInputCases() {
       {"unknown parameter", kDp + "--param gravity=9.8", "gravity"},
       {"unknown state", kDp + "--x0 phi=0.1", "phi"},
       {"unknown integrator", kDp + "--integrator rk5", "rk5"},
+      {"unknown input hold", kDp + "--input-hold cubic",
+       "--input-hold: unknown input hold 'cubic'"},
       {"too many meas-noise-var", kDp + "--measure angles --meas-noise-var 0.1,0.2,0.3",
        "--meas-noise-var"},
       {"too few meas-noise-var", kDp + "--measure angles --meas-noise-var 0.1", "got 1"},
@@ -216,6 +218,26 @@ TEST(SimulateCli, InputSignalIsWrittenAsTheInputColumn) {
             std::string::npos)
       << sidecar;
   EXPECT_NE(sidecar.find("\"dt\": 0.02"), std::string::npos) << sidecar;
+}
+
+// The same PRBS force held (zoh) and drawn as lines (linear): the sidecar
+// says which, and the states differ.
+TEST(SimulateCli, InputHoldIsRecordedAndChangesTheTrajectory) {
+  TempDir dir;
+  const std::string base =
+      "simulate --model cart-pole --input 'prbs(amplitude=2, period=0.2, order=7, seed=5)' "
+      "--t-end 2 --dt 0.02 --integrator rk4 ";
+  ASSERT_EQ(RunEstlab(base + "--out zoh.csv", dir.path()).exit_code, 0);
+  const auto r = RunEstlab(base + "--input-hold linear --out linear.csv", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadFile(dir.File("zoh.csv.json")).find("\"input_hold\": \"zoh\""), std::string::npos);
+  EXPECT_NE(ReadFile(dir.File("linear.csv.json")).find("\"input_hold\": \"linear\""),
+            std::string::npos);
+  const std::vector<std::string> a = SplitLines(ReadFile(dir.File("zoh.csv")));
+  const std::vector<std::string> b = SplitLines(ReadFile(dir.File("linear.csv")));
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(a[1], b[1]);  // x0
+  EXPECT_NE(a.back(), b.back());
 }
 
 TEST(SimulateCli, HelpVersionAndListExitZero) {

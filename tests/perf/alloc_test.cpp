@@ -276,7 +276,9 @@ long AllocationsInSteps(Filter<Model, Meas>& filter, const typename Model::Param
   volatile double consumed = 0.0;
   AllocationCounter counter;
   for (int k = 0; k < kSteps; ++k) {
-    filter.SetInput(StepInput<Model>(k));
+    // The line from u_k to u_k+1 (linear hold): the held input is its
+    // special case, and a model without input holds 0.
+    filter.SetInputPath(StepInput<Model>(k), StepInput<Model>(k + 1));
     const FilterStatus status = filter.Predict(k * kDt, (k + 1) * kDt, Q);
     filter.SetInput(StepInput<Model>(k + 1));  // seen by h(x, u)
     const StepResult<M> r = filter.Update(z[k], R);

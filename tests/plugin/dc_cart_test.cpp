@@ -4,20 +4,24 @@
 // cover the truth (each parameter and x0 within 3 standard errors), each
 // output's residual sd must be its sensor's noise (within 10 %), and the
 // validation's free simulation must be within 1.05 x the noise-free floor
-// per output. Then the bad inputs: a missing input column, a NaN input and a
-// constant --input of the wrong length, each an error naming it, exit 2 and
-// nothing written. Label "plugin": the model file compiles (about 30 s).
+// per output. Then the bad inputs: a missing input column, a NaN input, a
+// constant --input of the wrong length and a bad or empty signal item, each
+// an error naming it, exit 2 and nothing written; and one seeded signal per
+// input written as each input's column. Label "plugin": the model file compiles (about 30 s).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli/cli_test_util.h"
 #include "plugin/plugin_test_util.h"
+#include "src/sim/input_signal.h"
 
 namespace estlab::testing {
 namespace {
@@ -102,7 +106,12 @@ TEST(DcCart, BadInputsNameTheColumnOrTheValueAndWriteNothing) {
        "no input column 'F' for the inputs of model 'dc-cart' (map another column with --column "
        "F=NAME; every input needs its column)"},
       {"simulate --model " + kModel + " --input 1 --out o.csv",
-       "--input: 1 value(s) for model 'dc-cart' with 2 inputs"},
+       "--input: 1 item(s) for 2 inputs (one constant or signal per input, comma-separated, in "
+       "the order V, F)"},
+      {"simulate --model " + kModel + " --input '1, prbs(period=2)' --out o.csv",
+       "--input (input F) prbs(...): "},
+      {"simulate --model " + kModel + " --input 'steps(0, 1:2),' --out o.csv",
+       "--input (input F): empty item"},
   };
   for (const Case& c : cases) {
     const RunResult r = Est(c.args, dir.path());
@@ -117,6 +126,34 @@ TEST(DcCart, BadInputsNameTheColumnOrTheValueAndWriteNothing) {
                                    "--out o.csv",
                                dir.path());
   EXPECT_EQ(mapped.exit_code, 0) << mapped.err;
+}
+
+// One seeded signal per input (a multisine voltage, a PRBS load): the
+// input columns are the signals' definitions at every row, and the cart
+// moves.
+TEST(DcCart, SignalPerInputIsWrittenAsEachInputsColumn) {
+  TempDir dir;
+  const std::string volts = "multisine(rms=2, mean=6, band=0.05:2, sines=8, seed=1)";
+  const std::string load = "prbs(amplitude=0.5, period=0.5, order=7, seed=2)";
+  const RunResult r = Est("simulate --model " + kModel + " --t-end 5 --dt 0.01 --input '" + volts +
+                              ", " + load + "' --integrator rk4 --out sim.csv",
+                          dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = SplitLines(ReadFile(dir.File("sim.csv")));
+  ASSERT_EQ(lines.size(), 502u);
+  EXPECT_EQ(lines[0], "t,x,v,V,F");
+  const InputSignal v = ParseInputSignal(volts, "V"), f = ParseInputSignal(load, "F");
+  double moved = 0.0;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    std::vector<double> cells;
+    std::stringstream row(lines[i]);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(std::stod(cell));
+    ASSERT_EQ(cells.size(), 5u) << lines[i];
+    EXPECT_EQ(cells[3], v.At(cells[0])) << lines[i];
+    EXPECT_EQ(cells[4], f.At(cells[0])) << lines[i];
+    moved = std::max(moved, std::abs(cells[1]));
+  }
+  EXPECT_GT(moved, 1e-3);
 }
 
 }  // namespace
