@@ -198,6 +198,16 @@ void EkfInput_(benchmark::State& s) {
     return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
   });
 }
+// The same with a linear hold: the input ramps over every step from (1 V,
+// 0.5 N) to (1.2 V, 0.4 N), evaluated at each RK4 stage.
+template <class Model, class Meas>
+void EkfInputLinear_(benchmark::State& s) {
+  FilterStep<Model, Meas>(s, Integrator::kRk4, [](Transition<Model>* tr, const auto& p) {
+    const double u0[2] = {1.0, 0.5}, u1[2] = {1.2, 0.4};
+    tr->SetInput(InputFrom<Model>(u0), InputFrom<Model>(u1));
+    return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
+  });
+}
 template <class Model, class Meas>
 void Kf_(benchmark::State& s) {
   FilterStep<Model, Meas>(s, Integrator::kRk4, [](Transition<Model>*, const auto& p) {
@@ -421,6 +431,8 @@ void RegisterAll() {
   using Dc2 = DcCartBench<2>;
   RegisterBenchmark("EKF/dc-cart/n2m2/one-input/rk4", EkfInput_<Dc1, Dc1::EncoderCurrent>);
   RegisterBenchmark("EKF/dc-cart/n2m2/two-inputs/rk4", EkfInput_<Dc2, Dc2::EncoderCurrent>);
+  RegisterBenchmark("EKF/dc-cart/n2m2/two-inputs-linear-hold/rk4",
+                    EkfInputLinear_<Dc2, Dc2::EncoderCurrent>);
   // Double pendulum, both angles measured.
   using DP = DoublePendulum;
   RegisterBenchmark("KF/double-pendulum/n4m2/rk4", Kf_<DP, DP::Angles>);
