@@ -66,15 +66,23 @@ std::string DirectionText(const Eigen::VectorXd& v, const std::vector<std::strin
   return out;
 }
 
-Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log) {
+Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log,
+                            const std::vector<double>& start) {
   Eigen::VectorXd scale = Eigen::VectorXd::Ones(int(theta.size()));
-  for (size_t i = 0; i < theta.size(); ++i)
-    if (!is_log[i] && theta[i] != 0.0) scale(int(i)) = std::abs(theta[i]);
+  for (size_t i = 0; i < theta.size(); ++i) {
+    const double from = i < start.size() ? std::abs(start[i]) : 0.0;
+    // Ended at 0 relative to its start: the start's units (a parameter that
+    // moved far but stayed away from 0 keeps its own, or its curvature in
+    // the start's units would make every other direction look flat).
+    const double s = std::abs(theta[i]) < kAtZero * from ? from : std::abs(theta[i]);
+    if (!is_log[i] && s > 0.0) scale(int(i)) = s;
+  }
   return scale;
 }
 
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
-                           const std::vector<std::string>& names, const std::vector<bool>& is_log) {
+                           const std::vector<std::string>& names, const std::vector<bool>& is_log,
+                           const std::vector<double>& start) {
   const int k = int(H.rows());
   FisherReport r;
   r.std_errors.assign(k, kInf);
@@ -92,9 +100,10 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
   }
   // Relative units for the parameters optimised on their natural scale (a
   // friction of 5e-5 N m s next to log variances): theta_i = s_i u_i with
-  // s_i = |theta_i| (1 for log parameters and zeros), so that the flatness
-  // test compares like with like. cov = S cov_u S.
-  const Eigen::VectorXd scale = FisherScale(theta, is_log);
+  // s_i = |theta_i| (|start_i| for one that ended at 0, 1 for log
+  // parameters and zeros), so that the flatness test compares like with
+  // like, and a parameter at 0 is not flat for being small. cov = S cov_u S.
+  const Eigen::VectorXd scale = FisherScale(theta, is_log, start);
   const Eigen::MatrixXd Hu = scale.asDiagonal() * Hs * scale.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Hu);
   const Eigen::VectorXd& lambda = eig.eigenvalues();

@@ -3,7 +3,9 @@
 // scale), in plain types: compiled once, not per model.
 //
 //   theta_i = s_i u_i, s_i = |theta_i| for a parameter on its natural scale
-//   (relative units), 1 for a log parameter
+//   (relative units), |start_i| for one that ended at 0 relative to its
+//   start (|theta_i| < kAtZero |start_i|: a laminar outflow at its >= 0
+//   bound), 1 for a log parameter and where both are 0
 //   S H S = V diag(lambda) V^T   (ascending lambda)
 //   a direction v_j is flat when lambda_j <= kFlatRatio * max |lambda|
 //   (the data do not determine theta along it); negative curvature there
@@ -17,7 +19,7 @@
 // and its SE sqrt(w^T cov w) (finite: w is orthogonal to v).
 //
 // Usage:
-//   FisherReport r = AnalyseFisher(H, theta, names, is_log);
+//   FisherReport r = AnalyseFisher(H, theta, names, is_log, theta_initial);
 //   for (const std::string& s : r.sentences) std::cout << s << "\n";
 #ifndef ESTLAB_ADAPTIVE_IDENTIFIABILITY_H_
 #define ESTLAB_ADAPTIVE_IDENTIFIABILITY_H_
@@ -39,9 +41,13 @@ struct FisherReport {
 // Relative eigenvalue below which a direction of H counts as flat.
 inline constexpr double kFlatRatio = 1e-9;
 
-// The relative units above: s_i = |theta_i| for a parameter on its natural
-// scale (1 for log parameters and zeros).
-Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log);
+// A natural-scale parameter below this fraction of its start has ended at 0.
+inline constexpr double kAtZero = 1e-6;
+
+// The relative units above (1 for log parameters and where theta and start
+// are 0). start: the optimiser's start (theta_initial), or empty.
+Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<bool>& is_log,
+                            const std::vector<double>& start = {});
 
 // The components of v of at least 5 % of its largest, in order.
 std::vector<int> SignificantComponents(const Eigen::VectorXd& v);
@@ -51,9 +57,11 @@ std::vector<int> SignificantComponents(const Eigen::VectorXd& v);
 std::string DirectionText(const Eigen::VectorXd& v, const std::vector<std::string>& names);
 
 // names: the parameters as in the report ("L", "qc", "r_theta"); is_log:
-// whether theta_i is the log of that parameter.
+// whether theta_i is the log of that parameter; start: where the optimiser
+// started (the units of a parameter that ended at 0), or empty.
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
-                           const std::vector<std::string>& names, const std::vector<bool>& is_log);
+                           const std::vector<std::string>& names, const std::vector<bool>& is_log,
+                           const std::vector<double>& start = {});
 
 }  // namespace estlab
 

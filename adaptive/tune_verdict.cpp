@@ -109,7 +109,7 @@ void ApplyVerdict(const Eigen::MatrixXd& H, const std::vector<bool>& lower_is_co
   for (size_t i = 0; i < free.size(); ++i) free[i] = !r.at_bound[i];
   double lambda_min = 0.0, lambda_max = 0.0;
   Eigen::VectorXd v;
-  const Eigen::VectorXd scale = FisherScale(r.theta, r.is_log);
+  const Eigen::VectorXd scale = FisherScale(r.theta, r.is_log, r.theta_initial);
   if (H.size() > 0 && FreeCurvature(H, scale, free, &lambda_min, &lambda_max, &v) &&
       lambda_min < -kNegativeRatio * lambda_max) {
     std::vector<double> at;

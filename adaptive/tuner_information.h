@@ -81,7 +81,8 @@ void FillUncertainty(const Objective<Model, Meas>& objective, const TunerOptions
     result->std_errors.assign(k, kInf);
     result->identifiability.push_back("standard errors not computed (compute_std_errors off)");
   } else {
-    FisherReport report = AnalyseFisher(H, result->theta, result->names, result->is_log);
+    FisherReport report =
+        AnalyseFisher(H, result->theta, result->names, result->is_log, result->theta_initial);
     result->std_errors = report.std_errors;
     result->correlation = report.correlation;
     result->fisher_eigenvalues = report.eigenvalues;

@@ -3,12 +3,19 @@
 callgrind output file (inclusive cost summed over every call site):
 
     bench/callgrind_calls.py callgrind.out 'Predict|Update'
+
+With a third argument PER, one number: the inclusive Ir of REGEX's calls
+over the number of calls of PER, e.g. Ir per filter step of a bench row
+(its loop function over its Predict calls; Google Benchmark's trial runs
+count in both, so nothing depends on how many iterations it chose):
+
+    bench/callgrind_calls.py callgrind.out 'FilterStep<' '::Predict\('
 """
 import re
 import sys
 
 
-def main(path, pattern):
+def main(path, pattern, per=None):
     names = {}  # id -> name (callgrind name compression)
     rx = re.compile(pattern)
     totals = {}  # name -> [calls, inclusive Ir]
@@ -36,10 +43,31 @@ def main(path, pattern):
                     t[0] += pending[1]
                     t[1] += cost
                 pending = None
+    if per is not None:
+        # totals holds REGEX's sites; count PER's calls in a second pass.
+        per_calls = Calls(path, re.compile(per))
+        cost = sum(c for _, c in totals.values())
+        print(f"{cost / max(per_calls, 1):.1f} Ir per call of {per} ({per_calls} calls)")
+        return
     for name, (calls, cost) in sorted(totals.items(), key=lambda kv: -kv[1][1]):
         short = re.sub(r"\(.*", "", name)[-90:]
         print(f"{cost / max(calls, 1):10.0f} Ir/call  {calls:9d} calls  {short}")
 
 
+def Calls(path, rx):
+    """Calls of the functions matching rx, over every call site."""
+    names, count, pending = {}, 0, None
+    with open(path, errors="replace") as f:
+        for line in f:
+            m = re.match(r"^c?fn=\((\d+)\)(?: (.*))?$", line.rstrip("\n"))
+            if m:
+                if m.group(2) is not None:
+                    names[m.group(1)] = m.group(2)
+                pending = names.get(m.group(1), "") if line.startswith("cfn=") else None
+            elif line.startswith("calls=") and pending is not None and rx.search(pending):
+                count += int(line.split("=")[1].split()[0])
+    return count
+
+
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    main(*sys.argv[1:4])

@@ -295,7 +295,7 @@ void StandardErrors(const ceres::CRSMatrix& jac, const ThetaMap& map,
   for (int row = 0; row < jac.num_rows; ++row)
     for (int i = jac.rows[row]; i < jac.rows[row + 1]; ++i) J(row, jac.cols[i]) = jac.values[i];
   const Eigen::MatrixXd H = J.transpose() * J / (r->residual_sd * r->residual_sd);
-  const FisherReport report = AnalyseFisher(H, r->theta, r->names, r->is_log);
+  const FisherReport report = AnalyseFisher(H, r->theta, r->names, r->is_log, r->theta_initial);
   r->std_errors = report.std_errors;
   r->identifiability = report.sentences;
   for (int j = 0; j < k; ++j) {

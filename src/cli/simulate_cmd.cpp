@@ -120,9 +120,17 @@ std::string SidecarJson(const ModelEntry& model, const SimulationSpec& spec,
   return j.str() + "\n";
 }
 
+bool IsTunedFilterKey(const std::string& key) {
+  for (const char* k : {"q", "q-diag", "q-white-accel", "r", "r-diag", "p0", "p0-diag",
+                        "integrator", "substeps", "method", "rtol", "atol", "input-hold"})
+    if (key == k) return true;
+  return false;
+}
+
 // The `param = NAME=VALUE` lines of a tuned.ini (and its `x0 = NAME=VALUE,...`
-// line into *x0); its filter noise and prior covariance lines are skipped,
-// any other key is an error naming FILE:LINE.
+// line into *x0); its filter noise, prior covariance and process-model lines
+// (the filter's integrator and hold: the truth takes --integrator and
+// --input-hold) are skipped, any other key is an error naming FILE:LINE.
 std::vector<std::pair<std::string, double>> ConfigParams(
     const std::string& path, std::vector<std::pair<std::string, double>>* x0) {
   std::ifstream in(path);
@@ -141,11 +149,10 @@ std::vector<std::pair<std::string, double>> ConfigParams(
       for (const auto& p : ParseAssignments({value}, where + ": param")) out.push_back(p);
     } else if (key == "x0") {
       for (const auto& p : ParseAssignments({value}, where + ": x0")) x0->push_back(p);
-    } else if (key != "q" && key != "q-diag" && key != "q-white-accel" && key != "r" &&
-               key != "r-diag" && key != "p0" && key != "p0-diag") {
+    } else if (!IsTunedFilterKey(key)) {
       throw InputError(where +
                        ": 'estlab simulate --config' reads 'param' and 'x0' lines (and skips a "
-                       "tuned.ini's Q, R and P0), not '" +
+                       "tuned.ini's Q, R, P0 and filter integrator), not '" +
                        key + "'");
     }
   }

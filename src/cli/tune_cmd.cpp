@@ -268,6 +268,31 @@ std::string X0PriorLine(const FilterSpec& spec, size_t x0_rows, int n) {
   return IniLine("p0", NoiseParam::kFixed, false, 0.0, spec.p0, n);
 }
 
+// The process model the tuned Q is per step of (a Q tuned for RK4 at this
+// dt is not the Q of Euler, nor of the other input hold): `--config`
+// readers take it too, and their command line wins.
+std::string ProcessModelLines(const ModelEntry& model, const FilterSpec& spec) {
+  const TransitionOptions& t = spec.transition;
+  std::string out = "integrator = ";
+  out += IntegratorName(t.integrator);
+  out += "\n";
+  if (t.integrator == Integrator::kCvodes) {
+    out += "method = ";
+    out += t.method == CvodesMethod::kBdf     ? "bdf"
+           : t.method == CvodesMethod::kAdams ? "adams"
+                                              : "default";
+    out += "\nrtol = " + FormatDouble(t.rtol) + "\natol = " + FormatDouble(t.atol) + "\n";
+  } else {
+    out += "substeps = " + std::to_string(t.substeps) + "\n";
+  }
+  if (model.has_input()) {
+    out += "input-hold = ";
+    out += InputHoldName(t.input_hold);
+    out += "\n";
+  }
+  return out;
+}
+
 void WriteMatrix(JsonWriter* j, const std::vector<double>& a, int n) {
   j->BeginArray();
   for (int i = 0; i < n; ++i)
@@ -611,6 +636,7 @@ int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const 
     if (!fit.converged)
       o << "# NOT A VERIFIED FIT (--keep-best): the best admissible point found; " << fit.message
         << "\n";
+    o << ProcessModelLines(model, spec);
     o << IniLine("q", NoiseParam::kFixed, spec.q_white_accel, spec.qc, spec.q, n);
     o << IniLine("r", NoiseParam::kFixed, false, 0.0, spec.r, m);
     for (size_t i = 0; i < fit.param_names.size(); ++i)
@@ -799,6 +825,7 @@ int RunTune(const std::vector<std::string>& args) {
     if (!result.IsConverged())
       out->stream() << "# NOT A VERIFIED FIT (--keep-best): the best admissible point found; "
                     << result.message << "\n";
+    out->stream() << ProcessModelLines(model, spec);
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
     out->stream() << IniLine("r", result.r_param, false, 0.0, result.r, m);
     for (size_t i = 0; i < result.param_names.size(); ++i)

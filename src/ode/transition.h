@@ -110,7 +110,6 @@ class Transition {
   }
   // The input at the step's start (and of the measurement at that time).
   const Input& input() const { return input_; }
-  const Input& input_end() const { return input_end_; }
   const Params& params() const { return params_; }
   const TransitionStats& stats() const { return stats_; }
 

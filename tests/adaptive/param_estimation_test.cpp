@@ -218,6 +218,39 @@ TEST(Fisher, FlatDirectionNamesTheRatioWithItsStandardError) {
       << r.sentences[0];
 }
 
+// A natural-scale parameter that ended at 0 (a laminar outflow at its
+// bound) with a curvature the data fix: measured in its own units, s_i =
+// |theta_i| ~ 1e-12 would shrink its scaled curvature to 1e-22 and call it
+// flat. Measured in the units of its start (0.1) it is determined, with
+// SE = 1 / sqrt(H_bb) from H^-1.
+TEST(Fisher, ParameterThatEndedNearZeroIsMeasuredInTheUnitsOfItsStart) {
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, 2);
+  H(0, 0) = 4.0;
+  H(1, 1) = 100.0;
+  const std::vector<double> theta = {std::log(0.2), 1e-12}, start = {std::log(0.3), 0.1};
+  const FisherReport without = AnalyseFisher(H, theta, {"log r", "l1"}, {true, false});
+  EXPECT_TRUE(std::isinf(without.std_errors[1]));  // the false "not identifiable"
+  const FisherReport r = AnalyseFisher(H, theta, {"log r", "l1"}, {true, false}, start);
+  EXPECT_TRUE(r.positive_definite);
+  EXPECT_TRUE(r.sentences.empty());
+  EXPECT_DOUBLE_EQ(r.std_errors[0], 0.5);
+  EXPECT_NEAR(r.std_errors[1], 0.1, 1e-15);
+  // One that moved far but stayed away from 0 keeps its own units (in the
+  // start's, its curvature 1e12 would make log r look flat): the same SEs
+  // as H^-1, nothing flat.
+  Eigen::MatrixXd Hf = H;
+  Hf(1, 1) = 1e12;  // l1 = 1e-4 +- 1e-6, started at 1
+  const FisherReport far =
+      AnalyseFisher(Hf, {std::log(0.2), 1e-4}, {"log r", "l1"}, {true, false}, {0.0, 1.0});
+  EXPECT_TRUE(far.positive_definite);
+  EXPECT_DOUBLE_EQ(far.std_errors[0], 0.5);
+  EXPECT_NEAR(far.std_errors[1], 1e-6, 1e-20);
+  // A parameter the data do not touch is flat whatever its start.
+  H(1, 1) = 0.0;
+  EXPECT_TRUE(
+      std::isinf(AnalyseFisher(H, theta, {"log r", "l1"}, {true, false}, start).std_errors[1]));
+}
+
 TEST(Fisher, ProductAndSingleFlatParameterAndNegativeCurvature) {
   // The NLL sees log m + log a (m * a): the flat direction is (1, -1).
   Eigen::MatrixXd H = Eigen::MatrixXd::Constant(2, 2, 9.0);

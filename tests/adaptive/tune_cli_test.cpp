@@ -91,11 +91,17 @@ TEST_F(TuneCli, TunesValidatesAndWritesAnIniThatFilterReads) {
   po::options_description desc;
   desc.add_options()("q-diag", po::value<std::string>())("q", po::value<std::string>())(
       "q-white-accel", po::value<std::string>())("r-diag", po::value<std::string>())(
-      "r", po::value<std::string>());
+      "r", po::value<std::string>())("integrator", po::value<std::string>())(
+      "substeps", po::value<std::string>());
   po::variables_map vm;
   std::ifstream in(File("tuned.ini"));
   po::store(po::parse_config_file(in, desc), vm);
   ASSERT_TRUE(vm.count("q-diag") && vm.count("r-diag"));
+  // The process model the per-step Q belongs to (no input: no hold line).
+  ASSERT_TRUE(vm.count("integrator") && vm.count("substeps")) << ini;
+  EXPECT_EQ(vm["integrator"].as<std::string>(), "rk4");
+  EXPECT_EQ(vm["substeps"].as<std::string>(), "1");
+  EXPECT_EQ(ini.find("input-hold"), std::string::npos) << ini;
   const double r_tuned = std::stod(vm["r-diag"].as<std::string>());
   EXPECT_NEAR(r_tuned, 0.01, 0.002);  // simulated R = 0.01 over 1000 updates
 

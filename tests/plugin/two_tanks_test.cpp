@@ -93,6 +93,9 @@ TEST(TwoTanks, ReadmeWalkthroughFitsAndValidatesNearTheNoiseFreeFloor) {
   const std::string ini = ReadFile(dir.path() + "/tuned_pem.ini");
   EXPECT_NE(ini.find("\nx0 = h1="), std::string::npos) << ini;
   EXPECT_NE(ini.find("\nparam = k="), std::string::npos) << ini;
+  // And the process model its Q is per step of, the input's hold included.
+  EXPECT_NE(ini.find("\nintegrator = "), std::string::npos) << ini;
+  EXPECT_NE(ini.find("\ninput-hold = zoh\n"), std::string::npos) << ini;
   EXPECT_TRUE(dir.Exists("filtered_valid.csv"));
 }
 
