@@ -15,11 +15,11 @@ import re
 import sys
 
 
-def main(path, pattern, per=None):
+def Callees(path):
+    """name -> [calls, inclusive Ir], summed over every call site."""
     names = {}  # id -> name (callgrind name compression)
-    rx = re.compile(pattern)
-    totals = {}  # name -> [calls, inclusive Ir]
-    pending = None  # (name, calls) waiting for its cost line
+    totals = {}
+    pending = None  # [name, calls] waiting for its cost line
     with open(path, errors="replace") as f:
         for line in f:
             line = line.rstrip("\n")
@@ -36,37 +36,26 @@ def main(path, pattern, per=None):
                 continue
             if pending is not None and pending[1] is not None and line and line[0] in "0123456789+-*":
                 parts = line.split()
-                cost = int(parts[1]) if len(parts) > 1 else 0
-                name = pending[0]
-                if rx.search(name):
-                    t = totals.setdefault(name, [0, 0])
-                    t[0] += pending[1]
-                    t[1] += cost
+                t = totals.setdefault(pending[0], [0, 0])
+                t[0] += pending[1]
+                t[1] += int(parts[1]) if len(parts) > 1 else 0
                 pending = None
+    return totals
+
+
+def main(path, pattern, per=None):
+    callees = Callees(path)
+    rx = re.compile(pattern)
+    totals = {name: t for name, t in callees.items() if rx.search(name)}
     if per is not None:
-        # totals holds REGEX's sites; count PER's calls in a second pass.
-        per_calls = Calls(path, re.compile(per))
+        rx_per = re.compile(per)
+        per_calls = sum(calls for name, (calls, _) in callees.items() if rx_per.search(name))
         cost = sum(c for _, c in totals.values())
         print(f"{cost / max(per_calls, 1):.1f} Ir per call of {per} ({per_calls} calls)")
         return
     for name, (calls, cost) in sorted(totals.items(), key=lambda kv: -kv[1][1]):
         short = re.sub(r"\(.*", "", name)[-90:]
         print(f"{cost / max(calls, 1):10.0f} Ir/call  {calls:9d} calls  {short}")
-
-
-def Calls(path, rx):
-    """Calls of the functions matching rx, over every call site."""
-    names, count, pending = {}, 0, None
-    with open(path, errors="replace") as f:
-        for line in f:
-            m = re.match(r"^c?fn=\((\d+)\)(?: (.*))?$", line.rstrip("\n"))
-            if m:
-                if m.group(2) is not None:
-                    names[m.group(1)] = m.group(2)
-                pending = names.get(m.group(1), "") if line.startswith("cfn=") else None
-            elif line.startswith("calls=") and pending is not None and rx.search(pending):
-                count += int(line.split("=")[1].split()[0])
-    return count
 
 
 if __name__ == "__main__":
