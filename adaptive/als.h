@@ -91,6 +91,7 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
   auto filter = MakeFilter<Model, Meas>(spec, params, transition.get());
   filter->SetInput(InputFrom<Model>(InputAtRow(spec, d, 0)));
   const Mat<M, M> R = MatFromVector<M, M>(spec.r);
+  if (!d.t.empty()) filter->SetTime(d.t[0]);
   filter->Initialize(PriorMean<Model, Meas>(spec, d), MatFromVector<N, N>(spec.p0));
   std::vector<AlsStep<N, M>> steps;
   auto fail = [&](size_t k, const std::string& what) {
@@ -117,7 +118,8 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
         return true;
       },
       [&](size_t k, const Vec<double, M>* z, const double* u) {
-        filter->SetInput(InputFrom<Model>(u));  // u_k, seen by h(x, u)
+        filter->SetInput(InputFrom<Model>(u));  // u_k, seen by h(t, x, u)
+        filter->SetTime(d.t[k]);
         if (z == nullptr)
           throw InputError("ALS needs a measurement at every row: row " + std::to_string(k) +
                            " (line " + std::to_string(k < d.lines.size() ? d.lines[k] : 0) +

@@ -139,17 +139,17 @@ bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPoin
   return true;
 }
 
-// Adds B_k of a measured row (input u at its time).
+// Adds B_k of a measured row at time t (input u there).
 template <class Model, class Meas>
 bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& state,
                     const SmoothedMoments<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
-                    const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                    double t, const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   PointsT<double, N> points(N, state.unit_points.cols());
   if (!row.P.allFinite() || !CubaturePoints<N>(state, row.x, row.P, &points)) return false;
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
-    const Vec<double, M> e = lik.MeasurementResidual(z, points.col(i), u);
+    const Vec<double, M> e = lik.MeasurementResidual(z, t, points.col(i), u);
     sums->b.noalias() += state.mean_weights(i) * e * e.transpose();
   }
   ++sums->measurements;
@@ -195,7 +195,8 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
           return false;
         },
         [&](size_t k, const Vec<double, Meas::kDim>* z, const double* u) {
-          if (z == nullptr || AddMeasurement(lik, state, rows[k], *z, InputFrom<Model>(u), sums))
+          if (z == nullptr ||
+              AddMeasurement(lik, state, rows[k], *z, d.t[k], InputFrom<Model>(u), sums))
             return true;
           *why = "the smoothed covariance of row " + std::to_string(k) + where +
                  " is not positive semidefinite";

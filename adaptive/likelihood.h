@@ -161,15 +161,15 @@ class InnovationLikelihood {
     KfPredict<Model, kM>(kf_lin_, *step, u.u0, u.u1, no_noise, &next, &P);
     return next;
   }
-  Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, const Vec<double, kN>& x,
+  Vec<double, kM> MeasurementResidual(const Vec<double, kM>& z, double t, const Vec<double, kN>& x,
                                       const InputOf<Model>& u) const {
     Vec<double, kM> z_pred;
-    if (kf_) {  // h(x*, u*) + H wrap(x - x*) + D (u - u*), as KfUpdate
-      z_pred = kf_lin_.h_star +
-               kf_lin_.H * WrapResidual<kN>(x - kf_lin_.x_star, Model::kAngleStates) +
-               kf_lin_.D * (InputColumn<Model>(u) - kf_lin_.u_star);
+    if (kf_) {  // h(t, x*, u*) + H wrap(x - x*) + D (u - u*), as KfUpdate
+      const KfLin& lin = KfLinAt(t);
+      z_pred = lin.h_star + lin.H * WrapResidual<kN>(x - lin.x_star, Model::kAngleStates) +
+               lin.D * (InputColumn<Model>(u) - lin.u_star);
     } else {
-      z_pred = EvalMeasurement<Model, Meas, double>(x, u, params_);
+      z_pred = EvalMeasurement<Model, Meas, double>(t, x, u, params_);
     }
     return WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
   }
@@ -264,8 +264,24 @@ class InnovationLikelihood {
   bool Predict(Belief<T>* b, double t0, double t1, const InputPath<Model>& u, const StateCovT<T>& Q,
                const P& p, std::string* why) const;
   template <class T, class P>
-  bool Update(Belief<T>* b, const Vec<double, kM>& z, const InputOf<Model>& u, const MeasCovT<T>& R,
-              const P& p, MeasT<T>* whitened, T* log_det, std::string* why) const;
+  bool Update(Belief<T>* b, const Vec<double, kM>& z, double t, const InputOf<Model>& u,
+              const MeasCovT<T>& R, const P& p, MeasT<T>* whitened, T* log_det,
+              std::string* why) const;
+  // The KF's linearisation for an update at time t: kf_lin_ (a reference),
+  // or for a measurement h(t, x, u) a copy with h*, H, D at t
+  // (KfLinearizeMeasurement; a copy, so that concurrent starts may share
+  // this object).
+  using KfLin = KfLinearization<kN, kM, kU>;
+  decltype(auto) KfLinAt(double t) const {
+    if constexpr (MeasurementSeesTime<Meas, Model>) {
+      KfLin lin = kf_lin_;
+      KfLinearizeMeasurement<Model, Meas>(t, params_, &lin);
+      return lin;
+    } else {
+      (void)t;
+      return (kf_lin_);
+    }
+  }
   // x- = Phi(x) (and F = dPhi/dx when F is not null) for scalar T: the
   // CVODES transition for double, AD through the fixed-step integrator
   // otherwise (a nested Jet for F when T is a Jet).
@@ -480,7 +496,7 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
       if (z != nullptr) {
         MeasT<T> e;
         T log_det;
-        if (!Update<T>(&b, *z, InputFrom<Model>(u), R, p, &e, &log_det, &reason))
+        if (!Update<T>(&b, *z, d.t[k], InputFrom<Model>(u), R, p, &e, &log_det, &reason))
           return fail(d, k, "update failed: " + reason);
         if (update_index >= options_.burn_in) sink(e, log_det);
         ++update_index;
@@ -587,14 +603,14 @@ bool InnovationLikelihood<Model, Meas>::Predict(Belief<T>* b, double t0, double 
 
 template <class Model, class Meas>
 template <class T, class P>
-bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z,
+bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, kM>& z, double t,
                                                const InputOf<Model>& input, const MeasCovT<T>& R,
                                                const P& p, MeasT<T>* whitened, T* log_det,
                                                std::string* why) const {
   GaussianUpdate<T, kN, kM> u;
   FilterStatus status;
   if (kf_) {
-    status = KfUpdate<Model, Meas, T>(kf_lin_, input, b->x, b->P, z, R, &u, why);
+    status = KfUpdate<Model, Meas, T>(KfLinAt(t), input, b->x, b->P, z, R, &u, why);
   } else if (sigma_) {
     // Y_i: the propagated points, or new ones from (x-, P-) without jitter.
     const bool redraw = sigma_redraw_ || !b->have_propagated;
@@ -605,9 +621,9 @@ bool InnovationLikelihood<Model, Meas>::Update(Belief<T>* b, const Vec<double, k
     }
     status =
         SigmaUpdate<Model, Meas, T>(sigma_set_, redraw ? b->points : b->propagated,
-                                    &b->measurement_points, b->x, b->P, z, R, input, p, &u, why);
+                                    &b->measurement_points, b->x, b->P, z, R, t, input, p, &u, why);
   } else {
-    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, input, p, iterations_, &u, why);
+    status = EkfUpdate<Model, Meas, T>(b->x, b->P, z, R, t, input, p, iterations_, &u, why);
   }
   if (status != FilterStatus::kOk) return false;
   Whiten<kM, T>(u.L, u.nu, whitened, log_det);

@@ -165,7 +165,8 @@ void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make)
   const Mat<N, N> P0 = 0.01 * Mat<N, N>::Identity();
   const Mat<N, N> Q = 1e-4 * Mat<N, N>::Identity();
   const Mat<M, M> R = 1e-2 * Mat<M, M>::Identity();
-  const Vec<double, M> z = EvalMeasurement<Model, Meas, double>(x0, transition->input(), params);
+  const Vec<double, M> z =
+      EvalMeasurement<Model, Meas, double>(0.0, x0, transition->input(), params);
   filter->Initialize(x0, P0);
   const double dt = 0.01;
   double t = 0.0;

@@ -32,7 +32,9 @@
 //   kName, kDim (m), kOutputs (m names), kAngleOutputs (m flags)
 //   Eval<T>(x, params)               h(x) for any scalar T, or
 //   Eval<T>(x, u, params)            h(x, u): a measurement that sees the
-//                                    input (u as in Rhs; EvalMeasurement)
+//                                    input (u as in Rhs; EvalMeasurement), or
+//   Eval<T>(t, x, u, params)         h(t, x, u): one that sees the time too
+//                                    (t: const T&, as in Rhs)
 #ifndef ESTLAB_MODELS_MODEL_H_
 #define ESTLAB_MODELS_MODEL_H_
 
@@ -166,6 +168,14 @@ concept DynamicModel = requires(const Vec<double, M::kStateDim>& x, const InputO
   std::tuple_size<typename M::Measurements>::value;
 };
 
+// True for a measurement h(t, x, u, p) of M: Eval takes the time and the
+// input.
+template <class Meas, class M>
+concept MeasurementSeesTime = requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
+                                       const typename M::Params& p) {
+  { Meas::template Eval<double>(0.0, x, u, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
+};
+
 // True for a measurement h(x, u, p) of M: Eval takes the input.
 template <class Meas, class M>
 concept MeasurementSeesInput = requires(const Vec<double, M::kStateDim>& x, const InputOf<M>& u,
@@ -180,20 +190,24 @@ concept MeasurementOf = DynamicModel<M> &&
   { Meas::kDim } -> std::convertible_to<int>;
   requires Meas::kOutputs.size() == std::size_t(Meas::kDim);
   requires Meas::kAngleOutputs.size() == std::size_t(Meas::kDim);
-  requires MeasurementSeesInput<Meas, M> || requires {
+  requires MeasurementSeesTime<Meas, M> || MeasurementSeesInput<Meas, M> || requires {
     { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
   };
 };
 
-// h(x, u, p) for every measurement: the input is passed to those that see it
-// and dropped for the others. T: the state's scalar; P: Params or ParamsT<S>.
+// h(t, x, u, p) for every measurement: the time and the input are passed to
+// those that see them and dropped for the others. t: the measurement's time
+// (the filters' time(), src/filters/filter.h). T: the state's scalar; P:
+// Params or ParamsT<S>.
 template <class Model, class Meas, class T, class P>
-Vec<T, Meas::kDim> EvalMeasurement(const Vec<T, Model::kStateDim>& x, const InputOf<Model>& u,
-                                   const P& p) {
-  if constexpr (MeasurementSeesInput<Meas, Model>)
-    return Meas::template Eval<T>(x, u, p);
+Vec<T, Meas::kDim> EvalMeasurement(double t, const Vec<T, Model::kStateDim>& x,
+                                   const InputOf<Model>& u, const P& p) {
+  if constexpr (MeasurementSeesTime<Meas, Model>)
+    return Meas::template Eval<T>(T(t), x, u, p);
+  else if constexpr (MeasurementSeesInput<Meas, Model>)
+    return (void)t, Meas::template Eval<T>(x, u, p);
   else
-    return (void)u, Meas::template Eval<T>(x, p);
+    return (void)t, (void)u, Meas::template Eval<T>(x, p);
 }
 
 // Every measurement in M::Measurements satisfies MeasurementOf<., M>.

@@ -83,7 +83,7 @@ class Ekf final : public FilterCommon<Model, Meas> {
       return FailResult(ready, error_);
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status = EkfUpdate<Model, Meas>(x_, P_, z, R, transition_->input(), params_,
+    const FilterStatus status = EkfUpdate<Model, Meas>(x_, P_, z, R, this->time(), transition_->input(), params_,
                                                        options_.iterations, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
@@ -93,7 +93,8 @@ class Ekf final : public FilterCommon<Model, Meas> {
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
     result.residual = WrapResidual<kM>(
-        z - MeasurementAndJacobian<Model, Meas>(x_, transition_->input(), params_, nullptr),
+        z - MeasurementAndJacobian<Model, Meas>(this->time(), x_, transition_->input(), params_,
+                                            nullptr),
         Meas::kAngleOutputs);
     return result;
   }

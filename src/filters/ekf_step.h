@@ -17,7 +17,7 @@
 //   GaussianUpdate<double, 2, 1> u;
 //   std::string why;
 //   P_pred = EkfPredictCovariance<2>(F, P, Q);
-//   if (EkfUpdate<Model, Meas>(x_pred, P_pred, z, R, params, 1, &u, &why) != FilterStatus::kOk) ...
+//   if (EkfUpdate<Model, Meas>(x_pred, P_pred, z, R, t, u, params, 1, &u, &why) != ...) ...
 #ifndef ESTLAB_FILTERS_EKF_STEP_H_
 #define ESTLAB_FILTERS_EKF_STEP_H_
 
@@ -39,21 +39,22 @@ MatT<T, N, N> EkfPredictCovariance(const MatT<T, N, N>& F, const MatT<T, N, N>& 
   return P_pred;
 }
 
-// The (iterated) EKF update of (x-, P-) with measurement z, noise R and the
-// input u at the measurement time (seen by measurements h(x, u)).
+// The (iterated) EKF update of (x-, P-) with measurement z, noise R, at the
+// measurement's time t with the input u there (seen by measurements
+// h(t, x, u)).
 // Returns kOk, or a failure status with the reason in *why (set only then).
 template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
                        const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                        const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                       const InputOf<Model>& u, const Prm& params, int iterations,
+                       double t, const InputOf<Model>& u, const Prm& params, int iterations,
                        GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const Vec<T, M> zt = z.template cast<T>();
   MatT<T, M, N> H;
   // i = 0:  nu = wrap(z - h(x-)),  S = H P- H^T + R,  K = P- H^T S^-1
-  out->nu = WrapResidual<M, T>(zt - MeasurementAndJacobian<Model, Meas, T>(x_prior, u, params, &H),
+  out->nu = WrapResidual<M, T>(zt - MeasurementAndJacobian<Model, Meas, T>(t, x_prior, u, params, &H),
                                Meas::kAngleOutputs);
   if (!KalmanGain<N, M, T>(H, P, R, &out->S, &out->L, &out->K)) {
     *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
@@ -64,7 +65,7 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
   for (int i = 1; i < iterations; ++i) {
     // x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i wrap(x- - x_i))
     const Vec<T, M> r = WrapResidual<M, T>(
-        zt - MeasurementAndJacobian<Model, Meas, T>(x_iter, u, params, &H), Meas::kAngleOutputs);
+        zt - MeasurementAndJacobian<Model, Meas, T>(t, x_iter, u, params, &H), Meas::kAngleOutputs);
     if (!KalmanGain<N, M, T>(H, P, R, &S_i, &L_i, &out->K)) {
       *why = "Cholesky of S = H P H^T + R failed in IEKF iteration " + std::to_string(i);
       return FilterStatus::kFactorizationFailed;

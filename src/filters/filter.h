@@ -6,6 +6,7 @@
 //   filter.Initialize(x0, P0);
 //   for each measurement time t_k:
 //     if (k > 0) status = filter.Predict(t_{k-1}, t_k, Q);   // process model
+//     filter.SetInput(u_k); filter.SetTime(t_k);            // seen by h(t, x, u)
 //     if (z_k present) StepResult r = filter.Update(z_k, R); // measurement
 //
 // Q and R are arguments, not members, so adaptation (adaptive/) and tuning
@@ -13,8 +14,8 @@
 // values, integrator failure) is a status, never an exception or a crash.
 //
 // Measurement type `Meas` is one of Model's measurement structs (kDim,
-// kOutputs, kAngleOutputs, Eval<T>(x, params)). Innovations of angle outputs
-// are wrapped to (-pi, pi].
+// kOutputs, kAngleOutputs, Eval<T>(x, params), or h(x, u) or h(t, x, u):
+// models/model.h). Innovations of angle outputs are wrapped to (-pi, pi].
 #ifndef ESTLAB_FILTERS_FILTER_H_
 #define ESTLAB_FILTERS_FILTER_H_
 
@@ -100,6 +101,11 @@ class Filter {
   // both to it (transition->SetInput(u0, u1)); the LinearizedKf stores
   // them. The default ignores them (models without input).
   virtual void SetInputPath(const InputOf<Model>& /*u0*/, const InputOf<Model>& /*u1*/) {}
+  // The time t_k of the next Update, seen by a measurement h(t, x, u)
+  // (EvalMeasurement, models/model.h): the run loops set it with the input
+  // of row k, before its update.
+  void SetTime(double t) { time_ = t; }
+  double time() const { return time_; }
 
   virtual const State& mean() const = 0;
   virtual const StateCov& cov() const = 0;
@@ -117,6 +123,9 @@ class Filter {
   // (before any resampling) and the number of particles. False for filters
   // without particles, or before any Update.
   virtual bool EffectiveSampleSize(double* /*ess*/, int* /*particles*/) const { return false; }
+
+ private:
+  double time_ = 0.0;
 };
 
 // Wraps the angle components (flags[i] true) of a residual to (-pi, pi], for

@@ -127,6 +127,12 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
       return FailResult(ready, error_);
+    if constexpr (MeasurementSeesTime<Meas, Model>) {  // h*, H, D at this update's time
+      KfLinearizeMeasurement<Model, Meas>(this->time(), params_, &lin_);
+      if (!lin_.h_star.allFinite() || !lin_.H.allFinite() || !lin_.D.allFinite())
+        return FailResult(FilterStatus::kNonFinite,
+                          "h(t, x*, u*) or its Jacobians are not finite at this update's time");
+    }
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status = KfUpdate<Model, Meas>(lin_, input_, x_, P_, z, R, &u, &why);
@@ -175,8 +181,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       B_ = InputJacobian<Model>(lin_.x_star, u_star, params_);
       c_ = ContinuousRhs<Model>(lin_.x_star, u_star, params_);
     }
-    lin_.h_star = MeasurementAndJacobian<Model, Meas>(lin_.x_star, u_star, params_, &lin_.H);
-    lin_.D = MeasurementInputJacobian<Model, Meas>(lin_.x_star, u_star, params_);
+    KfLinearizeMeasurement<Model, Meas>(this->time(), params_, &lin_);
     linear_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() &&
                      lin_.h_star.allFinite() && lin_.D.allFinite();
     cached_dt_ = -1.0;  // invalidate the discretisation cache

@@ -9,7 +9,8 @@
 // the step's ends, u1 = u0 under zero-order hold):
 //   x- = x* + Phi delta + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d,
 //   P- = Phi P Phi^T + Q
-// Update:
+// Update (h*, H, D at the update's time t_k for a measurement h(t, x, u),
+// KfLinearizeMeasurement; once, at x*, for the others):
 //   z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
 //   S = H P- H^T + R,  K = P- H^T S^-1
 //   x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
@@ -21,6 +22,7 @@
 #include "src/filters/filter.h"
 #include "src/filters/filter_util.h"
 #include "src/filters/gaussian_update.h"
+#include "src/filters/linearize.h"
 
 namespace estlab {
 
@@ -52,6 +54,16 @@ Vec<double, kInputCols<Model>> InputColumn(const InputOf<Model>& u) {
   Vec<double, kInputCols<Model>> v;
   for (int i = 0; i < kInputCols<Model>; ++i) v(i) = InputComponent<Model>(u, i);
   return v;
+}
+
+// h* = h(t, x*, u*), H = dh/dx and D = dh/du there: the measurement's part
+// of the linearisation, at time t (which only a measurement h(t, x, u) sees).
+template <class Model, class Meas>
+void KfLinearizeMeasurement(double t, const typename Model::Params& params,
+                            KfLinearization<Model::kStateDim, Meas::kDim, kInputCols<Model>>* lin) {
+  const InputOf<Model> u_star = InputFrom<Model>(lin->u_star.data());
+  lin->h_star = MeasurementAndJacobian<Model, Meas>(t, lin->x_star, u_star, params, &lin->H);
+  lin->D = MeasurementInputJacobian<Model, Meas>(t, lin->x_star, u_star, params);
 }
 
 template <class Model, int M, class T = double>

@@ -6,7 +6,7 @@
 //   Mat<4, 1> B = InputJacobian<models::CartPole>(x_star, 0.0, params);
 //   Mat<2, 4> H;
 //   Vec<double, 2> hx = MeasurementAndJacobian<models::CartPole,
-//                                              models::CartPole::XTheta>(x, u, params, &H);
+//                                              models::CartPole::XTheta>(t, x, u, params, &H);
 //
 // A = df/dx and H = dh/dx are exact (forward-mode AD with ceres::Jet).
 // WARNING: B = df/du and D = dh/du are central differences, because models
@@ -109,36 +109,39 @@ Vec<double, Model::kStateDim> StepMapJacobians(const Vec<double, Model::kStateDi
       x, F);
 }
 
-// h(x, u), and H = dh/dx (x, u) by automatic differentiation when H is not
-// null, for x of any scalar T (double; ceres::Jet, whose H is then a nested
-// Jet: src/ode/nested_jet.h). u reaches only the measurements that see the
-// input (EvalMeasurement, models/model.h).
+// h(t, x, u), and H = dh/dx (t, x, u) by automatic differentiation when H is
+// not null, for x of any scalar T (double; ceres::Jet, whose H is then a
+// nested Jet: src/ode/nested_jet.h). t and u reach only the measurements that
+// see them (EvalMeasurement, models/model.h).
 // Prm: Params, or ParamsT<T> when parameters are estimated (lifted to the
 // nested Jet inside the Jacobian).
 template <class Model, class Meas, class T = double, class Prm = typename Model::Params>
 Vec<T, Meas::kDim> MeasurementAndJacobian(
-    const Vec<T, Model::kStateDim>& x, const InputOf<Model>& u, const Prm& params,
+    double t, const Vec<T, Model::kStateDim>& x, const InputOf<Model>& u, const Prm& params,
     std::type_identity_t<MatT<T, Meas::kDim, Model::kStateDim>>* H) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  if (H == nullptr) return EvalMeasurement<Model, Meas, T>(x, u, params);
+  if (H == nullptr) return EvalMeasurement<Model, Meas, T>(t, x, u, params);
   return ValueAndJacobianT<M, N>(
       [&](const auto& xj) {
         using S = typename std::decay_t<decltype(xj)>::Scalar;
-        return EvalMeasurement<Model, Meas, S>(xj, u, ParamsAs<Model, S>(params));
+        return EvalMeasurement<Model, Meas, S>(t, xj, u, ParamsAs<Model, S>(params));
       },
       x, H);
 }
 
-// D = dh/du (x, u) of a measurement (zero for one that does not see the
+// D = dh/du (t, x, u) of a measurement (zero for one that does not see the
 // input), by InputDerivative's central difference.
 template <class Model, class Meas>
-Mat<Meas::kDim, kInputCols<Model>> MeasurementInputJacobian(const Vec<double, Model::kStateDim>& x,
+Mat<Meas::kDim, kInputCols<Model>> MeasurementInputJacobian(double t,
+                                                            const Vec<double, Model::kStateDim>& x,
                                                             const InputOf<Model>& u,
                                                             const typename Model::Params& params) {
-  if constexpr (MeasurementSeesInput<Meas, Model>)
+  if constexpr (MeasurementSeesInput<Meas, Model> || MeasurementSeesTime<Meas, Model>)
     return InputDerivative<Model>(
-        [&](const InputOf<Model>& v) { return EvalMeasurement<Model, Meas, double>(x, v, params); },
+        [&](const InputOf<Model>& v) {
+          return EvalMeasurement<Model, Meas, double>(t, x, v, params);
+        },
         u);
   else
     return Mat<Meas::kDim, kInputCols<Model>>::Zero();

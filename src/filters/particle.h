@@ -213,7 +213,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     if (!BeliefFinite(x_, P_))
       return FailResult(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
     result.residual = WrapResidual<kM>(
-        z - EvalMeasurement<Model, Meas, double>(x_, transition_->input(), params_),
+        z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
         Meas::kAngleOutputs);
     resampled_ = ess_ < options_.ess_threshold * double(n);
     if (resampled_) ResampleParticles();
@@ -246,19 +246,21 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     return e;
   }
 
-  // predicted_measurements_.col(i) = h(x_i, u); kPacketWidth particles per call
-  // for a packet model (src/core/packet.h).
+  // predicted_measurements_.col(i) = h(t, x_i, u); kPacketWidth particles per
+  // call for a packet model (src/core/packet.h).
   void EvalMeasurements() {
     const InputOf<Model>& u = transition_->input();
+    const double t = this->time();
     if constexpr (kPacketModel<Model>) {
       for (Eigen::Index first = 0; first < particles_.cols(); first += kPacketWidth)
         ScatterColumns<kM>(
-            EvalMeasurement<Model, Meas, Packet>(GatherColumns<kN>(particles_, first), u, params_),
+            EvalMeasurement<Model, Meas, Packet>(t, GatherColumns<kN>(particles_, first), u,
+                                                 params_),
             first, &predicted_measurements_);
     } else {
       for (Eigen::Index i = 0; i < particles_.cols(); ++i)
         predicted_measurements_.col(i) =
-            EvalMeasurement<Model, Meas, double>(State(particles_.col(i)), u, params_);
+            EvalMeasurement<Model, Meas, double>(t, State(particles_.col(i)), u, params_);
     }
   }
 

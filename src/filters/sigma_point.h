@@ -123,7 +123,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status = SigmaUpdate<Model, Meas>(
-        set_, Y, &measurement_points_, x_, P_, z, R, transition_->input(), params_, &u, &why);
+        set_, Y, &measurement_points_, x_, P_, z, R, this->time(), transition_->input(), params_,
+        &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
     SetInnovation<kM>(u.nu, u.S, u.L, &result);
@@ -132,7 +133,7 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
     result.residual = WrapResidual<kM>(
-        z - EvalMeasurement<Model, Meas, double>(x_, transition_->input(), params_),
+        z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
         Meas::kAngleOutputs);
     return result;
   }

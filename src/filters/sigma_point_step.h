@@ -22,7 +22,7 @@
 //   DrawSigmaPoints<2>(set, x, P, /*add_jitter=*/true, &X);
 //   ... Xp = Phi(X) ...
 //   SigmaPredictMoments<2>(set, Xp, Q, &x_pred, &P_pred);
-//   SigmaUpdate<Model, Meas>(set, Y, &Z, x_pred, P_pred, z, R, params, &u, &why);
+//   SigmaUpdate<Model, Meas>(set, Y, &Z, x_pred, P_pred, z, R, t, u, params, &out, &why);
 #ifndef ESTLAB_FILTERS_SIGMA_POINT_STEP_H_
 #define ESTLAB_FILTERS_SIGMA_POINT_STEP_H_
 
@@ -81,13 +81,13 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
                          PointsT<T, Meas::kDim>* Z, const Vec<T, Model::kStateDim>& x_prior,
                          const MatT<T, Model::kStateDim, Model::kStateDim>& P,
                          const Vec<double, Meas::kDim>& z, const MatT<T, Meas::kDim, Meas::kDim>& R,
-                         const InputOf<Model>& u, const Prm& params,
+                         double t, const InputOf<Model>& u, const Prm& params,
                          GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  // Z_i = h(Y_i, u),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)
+  // Z_i = h(t, Y_i, u),  z^ = Z_0 + sum_i Wm_i (Z_i - Z_0)
   for (Eigen::Index i = 0; i < Y.cols(); ++i)
-    Z->col(i) = EvalMeasurement<Model, Meas, T>(Vec<T, N>(Y.col(i)), u, params);
+    Z->col(i) = EvalMeasurement<Model, Meas, T>(t, Vec<T, N>(Y.col(i)), u, params);
   const Vec<T, M> z_pred = WeightedMean<M>(*Z, set.mean_weights);
   // S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,  C = sum_i Wc_i dY_i dZ_i^T
   out->S = WeightedCov<M>(*Z, z_pred, set.cov_weights);

@@ -183,10 +183,14 @@ std::string EvalFunction(const ModelFile& m, const MeasurementDecl& meas, int in
     body.Add("z(" + std::to_string(i) + ") = " + body.TCode(meas.outputs[i].expr) + ";");
   body.Add("return z;");
   const std::string x_type = "const Vec<T, " + std::to_string(m.states.size()) + ">& ";
-  // Eval(x, u, p) when an output uses an input (a measurement h(x, u)).
-  const std::string u = body.uses_u ? InputType(m) + "u, " : "";
+  // Eval(x, u, p) when an output uses an input (a measurement h(x, u)),
+  // Eval(t, x, u, p) when one uses the time (h(t, x, u)).
+  const std::string t = body.uses_t ? "const T& t, " : "";
+  const std::string u = body.uses_t   ? Param(body.uses_u, InputType(m), "u") + ", "
+                        : body.uses_u ? InputType(m) + "u, "
+                                      : "";
   return Spaces(indent) + "template <class T, class P>\n" + Spaces(indent) + "static " + vec +
-         " Eval(" + Param(body.uses_x(), x_type, "x") + ", " + u +
+         " Eval(" + t + Param(body.uses_x(), x_type, "x") + ", " + u +
          Param(body.uses_p, "const P& ", "p") + ") {\n" + body.Text(indent + 2) + Spaces(indent) +
          "}\n";
 }

@@ -181,7 +181,7 @@ class Checker {
 
   void ResolveName(Expr* n, Context context, int visible_lets) {
     if (const Decl* d = Find(n->text)) return ResolveDeclared(n, *d, context, visible_lets);
-    if (n->text == "t" && !IsObservation(context)) {
+    if (n->text == "t" && context != Context::kInvariant) {  // measurements: h(t, x, u)
       n->ref = NameRef::kTime;
     } else if (n->text == "t") {
       Report(n->pos, std::string(ContextWord(context)) + " cannot use the time 't'");

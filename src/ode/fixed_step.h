@@ -59,13 +59,17 @@ Vec<T, Model::kStateDim> Step(Integrator scheme, const Vec<T, Model::kStateDim>&
 // Step with everything it calls inlined (the model's Rhs, the vector sums):
 // GCC's unit-growth limit otherwise decides; in a large translation unit
 // (bench/filter_bench.cpp) it kept Rhs<Jet> as a call: +24 % per EKF step
-// of the two-input cart (bench/results/input_hold.md). For double and
-// first-order Jets only: GCC 12 fails (an internal compiler error) flattening
-// a nested Jet of a large model.
+// of the two-input cart (bench/results/input_hold.md). Only for the filters'
+// own step: double and first-order Jets of the state, with the model's
+// Params. Not for the tuner's steps on ParamsT<T> (flattened, they cost a
+// model file's --tuner compile x1.16), nor for nested Jets (GCC 12 fails with
+// an internal compiler error flattening one of a large model).
 template <class T>
-inline constexpr bool kFlatStep = std::is_same_v<T, double>;
+inline constexpr bool kFlatScalar = std::is_same_v<T, double>;
 template <template <class, int> class Jet, int N>
-inline constexpr bool kFlatStep<Jet<double, N>> = true;
+inline constexpr bool kFlatScalar<Jet<double, N>> = true;
+template <class Model, class T, class Prm>
+inline constexpr bool kFlatStep = kFlatScalar<T> && std::is_same_v<Prm, typename Model::Params>;
 
 template <class Model, class T, class Prm, class InputAt>
 [[gnu::flatten]] Vec<T, Model::kStateDim> FlatStep(Integrator scheme,
@@ -85,25 +89,10 @@ Vec<T, Model::kStateDim> FixedStep(Integrator scheme, const Vec<T, Model::kState
     return Model::template Step<T>(T(t), x, h, u, p);  // MakeTransition admits kDiscrete only
   } else {
     const auto held = [&u](double) -> const InputOf<Model>& { return u; };
-    if constexpr (fixed_step_detail::kFlatStep<T>)
+    if constexpr (fixed_step_detail::kFlatStep<Model, T, Prm>)
       return fixed_step_detail::FlatStep<Model, T>(scheme, x, t, h, held, p);
     else
       return fixed_step_detail::Step<Model, T>(scheme, x, t, h, held, p);
-  }
-}
-
-// One step along a ramping input (u.ramp): u(t) at every stage time.
-template <class Model, class T, class Prm = typename Model::Params>
-Vec<T, Model::kStateDim> FixedStepOnPath(Integrator scheme, const Vec<T, Model::kStateDim>& x,
-                                         double t, double h, const InputPath<Model>& u,
-                                         const Prm& p) {
-  if constexpr (kDiscreteTime<Model>) {
-    // The map sees the sample at the step's start under either hold (its
-    // substeps too): a discrete-time model has no input between samples.
-    return FixedStep<Model, T, Prm>(scheme, x, t, h, u.u0, p);
-  } else {
-    const auto line = [&u](double s) { return u.At(s); };
-    return fixed_step_detail::Step<Model, T>(scheme, x, t, h, line, p);
   }
 }
 
@@ -122,17 +111,19 @@ inline int RhsEvalsPerStep(Integrator scheme) {
 
 namespace fixed_step_detail {
 
-// FixedPropagate's loop on a ramping input: out of line, so that the held
-// loop (every zoh step) inlines as if the ramp did not exist.
+// FixedPropagate's loop on a ramping input, u(t) at every stage time: out
+// of line, so that the held loop (every zoh step) inlines as if the ramp did
+// not exist. Continuous-time models only: a discrete-time map sees the
+// sample at the step's start under either hold (its substeps too).
 template <class Model, class T, class Prm>
 [[gnu::noinline]] Vec<T, Model::kStateDim> PropagateOnPath(Integrator scheme,
                                                            const Vec<T, Model::kStateDim>& x0,
                                                            double t0, double h, int substeps,
                                                            const InputPath<Model>& u,
                                                            const Prm& p) {
+  const auto line = [&u](double s) { return u.At(s); };
   Vec<T, Model::kStateDim> x = x0;
-  for (int i = 0; i < substeps; ++i)
-    x = FixedStepOnPath<Model, T, Prm>(scheme, x, t0 + i * h, h, u, p);
+  for (int i = 0; i < substeps; ++i) x = Step<Model, T>(scheme, x, t0 + i * h, h, line, p);
   return x;
 }
 
@@ -145,8 +136,9 @@ Vec<T, Model::kStateDim> FixedPropagate(Integrator scheme, const Vec<T, Model::k
                                         double t0, double t1, int substeps,
                                         const InputPath<Model>& u, const Prm& p) {
   const double h = (t1 - t0) / substeps;
-  if (u.ramp && !kDiscreteTime<Model>)
-    return fixed_step_detail::PropagateOnPath<Model, T, Prm>(scheme, x0, t0, h, substeps, u, p);
+  if constexpr (!kDiscreteTime<Model>)
+    if (u.ramp)
+      return fixed_step_detail::PropagateOnPath<Model, T, Prm>(scheme, x0, t0, h, substeps, u, p);
   Vec<T, Model::kStateDim> x = x0;
   for (int i = 0; i < substeps; ++i)
     x = FixedStep<Model, T, Prm>(scheme, x, t0 + i * h, h, u.u0, p);

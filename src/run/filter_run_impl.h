@@ -328,6 +328,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Vec<double, N> x0 = PriorMean<Model, Meas>(spec, data);
   s.x0.assign(x0.data(), x0.data() + N);
+  if (!data.t.empty()) filter->SetTime(data.t[0]);
   filter->Initialize(x0, MatFromVector<N, N>(spec.p0));
   if (smoother) smoother->OnPrior();
   std::vector<RowRecord<N, M>> records;
@@ -357,7 +358,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   };
   auto row = [&](size_t k, const Vec<double, M>* z, const double* u) {
     const StateCov p_pred = filter->cov();
-    filter->SetInput(InputFrom<Model>(u));  // u_k: seen by h(x, u), held over the next step
+    filter->SetInput(InputFrom<Model>(u));  // u_k: seen by h(t, x, u), held over the next step
+    filter->SetTime(data.t[k]);
     RowRecord<N, M> rec;
     rec.t = data.t[k];
     rec.have_z = z != nullptr;

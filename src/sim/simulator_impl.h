@@ -85,15 +85,16 @@ SimulationResult Simulate(const SimulationSpec& spec) {
     throw InputError("the recorded inputs do not come in rows of " + std::to_string(nu));
 
   // Type-erased measurement.
-  std::vector<double> (*measure)(const State&, const InputOf<Model>&,
+  std::vector<double> (*measure)(double, const State&, const InputOf<Model>&,
                                  const typename Model::Params&) = nullptr;
   VisitMeasurement<Model>(spec.measurement, [&](auto m) {
     using Meas = decltype(m);
     for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("z_") + o);
     if (spec.noise_free_outputs)
       for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("y_") + o);
-    measure = [](const State& x, const InputOf<Model>& u, const typename Model::Params& p) {
-      const Vec<double, Meas::kDim> z = EvalMeasurement<Model, Meas, double>(x, u, p);
+    measure = [](double t, const State& x, const InputOf<Model>& u,
+                 const typename Model::Params& p) {
+      const Vec<double, Meas::kDim> z = EvalMeasurement<Model, Meas, double>(t, x, u, p);
       return std::vector<double>(z.data(), z.data() + Meas::kDim);
     };
   });
@@ -107,7 +108,7 @@ SimulationResult Simulate(const SimulationSpec& spec) {
     if (!spec.input_columns.empty())
       for (int i = 0; i < nu; ++i) row.push_back(InputComponent<Model>(u, i));
     if (measure != nullptr) {
-      const std::vector<double> y = measure(x, u, params);
+      const std::vector<double> y = measure(times[k], x, u, params);
       for (size_t j = 0; j < y.size(); ++j) {
         double z = y[j];
         if (!spec.meas_noise_var.empty()) z += std::sqrt(spec.meas_noise_var[j]) * rng.Normal();

@@ -397,12 +397,12 @@ TEST(VectorInput, JacobiansInTheStateAndInTheInput) {
       SCOPED_TRACE(::testing::Message()
                    << "x = (" << x(0) << ", " << x(1) << "), u = (" << u(0) << ", " << u(1) << ")");
       M2 H;
-      const V2 h = MeasurementAndJacobian<Cart2, Cart2::PosCurrent>(x, u, p, &H);
+      const V2 h = MeasurementAndJacobian<Cart2, Cart2::PosCurrent>(0.0, x, u, p, &H);
       EXPECT_LT(MaxAbs(h - CartH(x, u, p)), 1e-15);
       EXPECT_LT(MaxAbs(H - H_exact), 1e-12);
       EXPECT_LT(MaxAbs(H - MeasurementDifferenceInX(x, u, p)), 1e-8);
       // D = dh/du: the current sees the force only.
-      const M2 D = MeasurementInputJacobian<Cart2, Cart2::PosCurrent>(x, u, p);
+      const M2 D = MeasurementInputJacobian<Cart2, Cart2::PosCurrent>(0.0, x, u, p);
       EXPECT_LT(MaxAbs(D - D_exact), 1e-8);
       // B = df/du: dv'/dF = 1/m, dv'/dw = d(0.1 w^2)/dw = 0.2 w.
       const M2 B = InputJacobian<Cart2>(x, u, p);
@@ -410,11 +410,11 @@ TEST(VectorInput, JacobiansInTheStateAndInTheInput) {
       EXPECT_LT(MaxAbs(B - B_exact), 1e-8);
       // The measurement without input: h = p, H = [1, 0], D exactly zero.
       Mat<1, 2> H_pos;
-      const Vec<double, 1> h_pos = MeasurementAndJacobian<Cart2, Cart2::Pos>(x, u, p, &H_pos);
+      const Vec<double, 1> h_pos = MeasurementAndJacobian<Cart2, Cart2::Pos>(0.0, x, u, p, &H_pos);
       EXPECT_EQ(h_pos(0), x(0));
       EXPECT_EQ(H_pos(0, 0), 1.0);
       EXPECT_EQ(H_pos(0, 1), 0.0);
-      const Mat<1, 2> D_pos = MeasurementInputJacobian<Cart2, Cart2::Pos>(x, u, p);
+      const Mat<1, 2> D_pos = MeasurementInputJacobian<Cart2, Cart2::Pos>(0.0, x, u, p);
       EXPECT_EQ(D_pos(0, 0), 0.0);
       EXPECT_EQ(D_pos(0, 1), 0.0);
     }

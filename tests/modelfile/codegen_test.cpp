@@ -260,8 +260,11 @@ void InstantiateWith(const P& p) {
     const estlab::Vec<T, M::kStateDim> y = M::template Rhs<T>(T(0.0), x, 0.0, p);
     (void)y;
   }
-  std::apply([&](auto... meas) { ((void)decltype(meas)::template Eval<T>(x, p), ...); },
-             typename M::Measurements{});
+  std::apply(
+      [&](auto... meas) {
+        ((void)estlab::EvalMeasurement<M, decltype(meas), T>(0.0, x, 0.0, p), ...);
+      },
+      typename M::Measurements{});
 }
 
 // With double parameters, and with parameters of the state's scalar (as
@@ -318,6 +321,74 @@ int main() {
 TEST_F(CompiledHeaders, EveryExampleCompilesForDoubleJetAndNestedJet) {
   std::string log;
   EXPECT_TRUE(Build(kInstantiateAll, false, &log)) << log;
+}
+
+// A measurement that uses the time: h(t, x, u) (issue 34).
+const char* const kTimeSensor = R"([model]
+name = time-sensor
+input = F
+[states]
+x = [m]
+v = [m/s]
+[params]
+d = 0.05
+w = 0.7
+[rhs]
+x = v
+v = -x + F
+[measurement drift]
+pos = x + d * t
+[measurement tach]
+tach = v * cos(w * t) + 0.5 * F
+[measurement plain]
+x = x
+)";
+
+TEST(Codegen, MeasurementsThatUseTheTimeTakeIt) {
+  const std::string h =
+      GenerateModelHeader(ParseModelFile(kTimeSensor, "t.model"), "TimeSensor");
+  const char* const expected[] = {
+      "static Vec<T, 1> Eval(const T& t, const Vec<T, 2>& x, double /*u*/, const P& p) {",
+      "z(0) = v_x + p.v_d * t;",
+      "static Vec<T, 1> Eval(const T& t, const Vec<T, 2>& x, double u, const P& p) {",
+      "static Vec<T, 1> Eval(const Vec<T, 2>& x, const P& /*p*/) {",
+  };
+  for (const char* e : expected) EXPECT_NE(h.find(e), std::string::npos) << e << "\nin:\n" << h;
+}
+
+// The generated h(t, x, u) compiles for every scalar, satisfies the
+// contract, and EvalMeasurement passes it the time: at t = 2 the drift is
+// x + 2 d and the tachometer v cos(2 w) + F / 2.
+TEST_F(CompiledHeaders, TimeMeasurementCompilesAndSeesTheTime) {
+  WriteFile(dir_ / "time_sensor.model.h",
+            GenerateModelHeader(ParseModelFile(kTimeSensor, "t.model"), "TimeSensor"));
+  const std::string program = std::string(kInstantiateHelpers) + R"(
+#include <cmath>
+#include <cstdio>
+#include "time_sensor.model.h"
+
+using M = um::TimeSensor;
+static_assert(estlab::DynamicModel<M> && estlab::kAllMeasurementsOf<M>);
+static_assert(estlab::MeasurementSeesTime<M::DriftMeasurement, M>);
+static_assert(estlab::MeasurementSeesTime<M::TachMeasurement, M>);
+static_assert(!estlab::MeasurementSeesTime<M::PlainMeasurement, M>);
+
+int main() {
+  All<M>();
+  const M::Params p;
+  const estlab::Vec<double, 2> x(0.3, -1.1);
+  const double drift = estlab::EvalMeasurement<M, M::DriftMeasurement, double>(2.0, x, 0.4, p)(0);
+  const double tach = estlab::EvalMeasurement<M, M::TachMeasurement, double>(2.0, x, 0.4, p)(0);
+  const double want_drift = 0.3 + 2.0 * 0.05, want_tach = -1.1 * std::cos(1.4) + 0.2;
+  if (std::abs(drift - want_drift) > 1e-15 || std::abs(tach - want_tach) > 1e-15) {
+    std::printf("drift %.17g (want %.17g), tach %.17g (want %.17g)\n", drift, want_drift, tach,
+                want_tach);
+    return 1;
+  }
+}
+)";
+  std::string log;
+  EXPECT_TRUE(Build(program, true, &log)) << log;
 }
 
 // ---- Every name `model check` accepts compiles (issue 40, done-when 3) ----

@@ -246,7 +246,7 @@ std::vector<Vec<double, Meas::kDim>> Measurements(const typename Model::Params& 
     truth->SetInput(StepInput<Model>(k));
     x = truth->Step(x, k * kDt, (k + 1) * kDt);
     Vec<double, Meas::kDim> zk =
-        EvalMeasurement<Model, Meas, double>(x, StepInput<Model>(k + 1), params);
+        EvalMeasurement<Model, Meas, double>((k + 1) * kDt, x, StepInput<Model>(k + 1), params);
     for (int j = 0; j < Meas::kDim; ++j) zk(j) += 0.01 * std::sin(0.37 * k + j);
     z.push_back(zk);
   }
