@@ -19,8 +19,8 @@
 // R(theta) of scalar T (noise_param.h).
 //
 //   KF    the model linearised once about x* (KfOptions::operating_point, else the
-//         prior mean) and discretised exactly over each step length of the
-//         data (LinearizedKf, computed once in double).
+//         prior mean; h per update time when it sees t, KfLinAt) and discretised
+//         exactly over each step length (LinearizedKf, once, in double).
 //
 // Per update the recursion hands the whitened innovation e_k = L_k^-1 nu_k
 // (S_k = L_k L_k^T) and log det S_k = 2 sum log (L_k)_ii to a sink (Whiten,

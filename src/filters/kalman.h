@@ -15,8 +15,8 @@
 // delta wrapped):
 //   d/dt delta = A delta + B (u - u*) + c,   A = df/dx, B = df/du, c = f(x*, u*)
 //   z ~= h(x*, u*) + H delta + D (u - u*),   H = dh/dx, D = dh/du at (x*, u*)
-// (D = 0 unless the measurement sees the input; u in the update is the input
-// at the measurement time, SetInput's last value).
+// (D = 0 unless h sees u; u: the input at the update's time; h*, H, D are
+// re-linearised about x* at each update's time t_k when h sees t, SetTime).
 // Exact discretisation over dt, by the exponential of the augmented matrix
 //   exp([[A, B, c], [0, 0, 0], [0, 0, 0]] dt) = [[Phi, Gamma, d], [0, I, 0], [0, 0, 1]]
 //   delta+ = Phi delta + Gamma (u - u*) + d            (u held: zero-order hold)

@@ -204,7 +204,7 @@ class Checker {
       Report(n->pos, std::string(ContextWord(context)) + " cannot use " + KindName(d.ref) + " " +
                          Quoted(n->text) +
                          (context == Context::kMeasurement
-                              ? " (they see states, parameters, inputs and numbers)"
+                              ? " (they see states, parameters, inputs, the time and numbers)"
                               : " (they see only states, parameters and numbers)"));
       return;
     }

@@ -36,8 +36,8 @@
 // expression.h. Names available
 //   in [let]:               states, parameters, the input, t, earlier lets (+ dt in [step] models)
 //   in [rhs] / [step]:      the same and every let
-//   in measurements:        states, parameters, the inputs, numbers and pi (Eval(x, p), or
-//                           Eval(x, u, p) when an output uses an input; no time or lets)
+//   in measurements:        states, parameters, the inputs, t, numbers and pi (Eval(x, p),
+//                           Eval(x, u, p) with an input, Eval(t, x, u, p) with t; no lets)
 //   in invariants:          states, parameters, numbers and pi only (Invariants(x, p))
 //   in parameter defaults:  numbers, pi and functions (e.g. 0.15 * 0.17^2 / 12)
 // Sections may come in any order. Several [invariant GROUP] sections may be

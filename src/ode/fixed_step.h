@@ -60,10 +60,10 @@ Vec<T, Model::kStateDim> Step(Integrator scheme, const Vec<T, Model::kStateDim>&
 // GCC's unit-growth limit otherwise decides; in a large translation unit
 // (bench/filter_bench.cpp) it kept Rhs<Jet> as a call: +24 % per EKF step
 // of the two-input cart (bench/results/input_hold.md). Only for the filters'
-// own step: double and first-order Jets of the state, with the model's
-// Params. Not for the tuner's steps on ParamsT<T> (flattened, they cost a
-// model file's --tuner compile x1.16), nor for nested Jets (GCC 12 fails with
-// an internal compiler error flattening one of a large model).
+// own step (double and first-order Jets, the model's Params), not for nested
+// Jets (GCC 12: internal compiler error on a large model). Not yet decided
+// for ParamsT<Jet>: the compile saving is unmeasured, the tuner gradient
+// 1.11 vs 1.07 x dd92e03 flattened (input_hold.md "Stop 52"; next stop).
 template <class T>
 inline constexpr bool kFlatScalar = std::is_same_v<T, double>;
 template <template <class, int> class Jet, int N>

@@ -11,7 +11,7 @@
 //                     before the first row
 //   then visit the row with z_k, or with no measurement when any component
 //   of z_k is missing (NaN): no update then; with the input u_k, which a
-//   measurement h(x, u) sees.
+//   measurement h(t, x, u) sees at the row's time t_k.
 // An input is a pointer to nu values (InputAtRow: the data's input columns,
 // else spec.input), or null for the zero input; InputFrom<Model>(u)
 // (models/model.h) makes it the model's input.

@@ -3,7 +3,7 @@
 // here from the equations:
 //   * h and H = dh/dx from MeasurementAndJacobian equal the measurement's
 //     Eval and fourth-order central differences of it to 1e-8 at several
-//     times, and D = dh/du a hand derivative; H at another time differs;
+//     times, and D = dh/du the hand derivative (both depend on t);
 //   * the EKF through the run loop (RunFilterWith) equals a hand EKF that
 //     evaluates h at each row's time, in every estimate and log-likelihood,
 //     to 1e-10; a hand EKF that evaluates h at t = 0 is far off;
@@ -11,13 +11,15 @@
 //     z = cos(w t) x1 + sin(w t) x2 equals a hand time-varying KF to 1e-10
 //     (h* and H re-linearised at each update's time);
 //   * the tuner's NLL equals minus the sum of the filter's log-likelihoods
-//     for the KF, the EKF and the UKF (the likelihood has its own update
-//     code) to 1e-10;
+//     for the KF, the EKF, the IEKF and the UKF (the likelihood has its own
+//     update code) to 1e-10, and its gradient in Q and R (ceres::Jet, the
+//     EKF's nested Jet) matches central differences;
 //   * the particle filter's log-likelihood is near the KF's on the linear
 //     model, and far from that of a KF that ignores the time;
 //   * `simulate` writes y_k = h(t_k, x_k, u_k).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -27,6 +29,7 @@
 #include <vector>
 
 #include "adaptive/likelihood.h"
+#include "adaptive/tuner_fixture.h"
 #include "src/core/params.h"
 #include "src/filters/linearize.h"
 #include "src/ode/transition_impl.h"
@@ -44,7 +47,7 @@ constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
 // A damped oscillator pushed by u, as a discrete-time map (linear in x):
 //   x+ = x + dt (A x + b u),  A = [0 1; -k -c],  b = [0; 1]
 // measured by
-//   sensor: h(t, x, u) = [x1 + d t, sin(x2) cos(w t) + e u]  (a drifting
+//   sensor: h(t, x, u) = [x1 + d t, (sin(x2) + e u) cos(w t)]  (a drifting
 //           position and a tachometer whose gain turns with the time);
 //   rot:    h(t, x)    = cos(w t) x1 + sin(w t) x2            (linear in x).
 struct Drift {
@@ -90,7 +93,7 @@ struct Drift {
     static Vec<T, 2> Eval(const T& t, const Vec<T, 2>& x, double u, const Params& p) {
       using std::cos;
       using std::sin;
-      return Vec<T, 2>(x(0) + p.d * t, sin(x(1)) * cos(p.w * t) + p.e * u);
+      return Vec<T, 2>(x(0) + p.d * t, (sin(x(1)) + p.e * u) * cos(p.w * t));
     }
   };
   struct Rot {
@@ -126,7 +129,7 @@ M2 StepMatrix(double dt, const Drift::Params& p) {
 V2 StepInputColumn(double dt) { return V2(0.0, dt); }
 
 V2 SensorH(double t, const V2& x, double u, const Drift::Params& p) {
-  return V2(x(0) + p.d * t, std::sin(x(1)) * std::cos(p.w * t) + p.e * u);
+  return V2(x(0) + p.d * t, (std::sin(x(1)) + p.e * u) * std::cos(p.w * t));
 }
 M2 SensorJ(double t, const V2& x, const Drift::Params& p) {
   return (M2() << 1.0, 0.0, 0.0, std::cos(x(1)) * std::cos(p.w * t)).finished();
@@ -287,7 +290,7 @@ TEST(TimeMeasurement, JacobianMatchesCentralDifferences) {
   const Drift::Params p;
   const V2 x(0.6, -0.9);
   const double u = 0.35;
-  double h_apart = 0.0;
+  double h_apart = 0.0, H_apart = 0.0, D_apart = 0.0;
   for (const double t : {0.0, 0.8, 3.7, 11.2}) {
     SCOPED_TRACE(t);
     M2 H;
@@ -306,12 +309,17 @@ TEST(TimeMeasurement, JacobianMatchesCentralDifferences) {
     }
     EXPECT_LT(MaxAbs(H - H_cd), 1e-8);
     EXPECT_LT(MaxAbs(H - SensorJ(t, x, p)), 1e-15);
-    // D = dh/du = (0, e) at every time.
+    // D = dh/du = (0, e cos(w t)).
     const Vec<double, 2> D = MeasurementInputJacobian<Drift, Drift::Sensor>(t, x, u, p);
-    EXPECT_LT(MaxAbs(D - V2(0.0, p.e)), 1e-8);
+    EXPECT_LT(MaxAbs(D - V2(0.0, p.e * std::cos(p.w * t))), 1e-8);
     h_apart = std::max(h_apart, MaxAbs(h - SensorH(0.0, x, u, p)));
+    H_apart = std::max(H_apart, MaxAbs(H - SensorJ(0.0, x, p)));
+    D_apart = std::max(D_apart, std::abs(D(1) - p.e));
   }
-  EXPECT_GT(h_apart, 0.1);  // the time matters: h at t = 0 would be another value
+  // The time matters: h, H and D at t = 0 would be other values.
+  EXPECT_GT(h_apart, 0.1);
+  EXPECT_GT(H_apart, 0.1);
+  EXPECT_GT(D_apart, 0.1);
 }
 
 TEST(TimeMeasurement, EkfRunEqualsTheHandEkfAtEachRowsTime) {
@@ -347,9 +355,10 @@ void CheckNllIsMinusTheRunsLogLikelihood(bool rot) {
   const std::vector<FilterData> datasets = {SensorData(r, rot)};
   for (const FilterKindOptions& kind :
        {FilterKindOptions(KfOptions{}), FilterKindOptions(EkfOptions{}),
-        FilterKindOptions(SigmaPointOptions{})}) {
+        FilterKindOptions(EkfOptions{.iterations = 3}), FilterKindOptions(SigmaPointOptions{})}) {
     const FilterSpec spec = DriftSpec(kind, rot);
     const FilterRunOutput out = RunFilterWith<Drift, Meas>(spec, datasets[0]);
+    SCOPED_TRACE(out.summary.filter + (rot ? " rot" : " sensor"));
     ASSERT_TRUE(out.summary.ok) << out.summary.message;
     TunerOptions options;
     options.q_param = NoiseParam::kFixed;
@@ -358,7 +367,6 @@ void CheckNllIsMinusTheRunsLogLikelihood(bool rot) {
     const std::vector<double> theta = lik.InitialTheta();
     double nll = 0.0;
     ASSERT_TRUE(lik.template Nll<double>(theta.data(), &nll));
-    SCOPED_TRACE(out.summary.filter + (rot ? " rot" : " sensor"));
     EXPECT_NEAR(nll, -out.summary.loglik, 1e-10 * std::abs(nll));
   }
 }
@@ -366,6 +374,27 @@ void CheckNllIsMinusTheRunsLogLikelihood(bool rot) {
 TEST(TimeMeasurement, TunerNllIsMinusTheFiltersLogLikelihood) {
   CheckNllIsMinusTheRunsLogLikelihood<Drift::Sensor>(false);
   CheckNllIsMinusTheRunsLogLikelihood<Drift::Rot>(true);
+}
+
+// The gradient of the NLL in diagonal Q and R through ceres::Jet (and the
+// EKF's nested Jet for H), h(t, x, u) evaluated in those scalars. The UKF
+// with alpha = 0.5: at the default 1e-3 the double NLL's rounding noise
+// hides the gradient from central differences (tests/adaptive/tuner_test.cpp).
+TEST(TimeMeasurement, TunerGradientMatchesCentralDifferences) {
+  const Record r = MakeRecord(80);
+  const std::vector<FilterData> datasets = {SensorData(r, false)};
+  TunerOptions options;
+  options.q_param = NoiseParam::kDiag;
+  options.r_param = NoiseParam::kDiag;
+  uint64_t seed = 31;
+  for (const FilterKindOptions& kind :
+       {FilterKindOptions(KfOptions{}), FilterKindOptions(EkfOptions{}),
+        FilterKindOptions(SigmaPointOptions{.alpha = 0.5})}) {
+    const InnovationLikelihood<Drift, Drift::Sensor> lik(DriftSpec(kind, false), options,
+                                                          datasets);
+    ASSERT_EQ(lik.NumParams(), 4);
+    testing::CheckGradient(lik, seed++, "time measurement");
+  }
 }
 
 // The particle filter evaluates h at each row's time: on the linear rot
