@@ -345,8 +345,7 @@ x = x
 )";
 
 TEST(Codegen, MeasurementsThatUseTheTimeTakeIt) {
-  const std::string h =
-      GenerateModelHeader(ParseModelFile(kTimeSensor, "t.model"), "TimeSensor");
+  const std::string h = GenerateModelHeader(ParseModelFile(kTimeSensor, "t.model"), "TimeSensor");
   const char* const expected[] = {
       "static Vec<T, 1> Eval(const T& t, const Vec<T, 2>& x, double /*u*/, const P& p) {",
       "z(0) = v_x + p.v_d * t;",
