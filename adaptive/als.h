@@ -120,7 +120,7 @@ std::vector<AlsStep<Model::kStateDim, Meas::kDim>> RecordFilter(const FilterSpec
       [&](size_t k, const Vec<double, M>* z, const double* u) {
         filter->SetInput(InputFrom<Model>(u));  // u_k, seen by h(t, x, u)
         filter->SetTime(d.t[k]);
-        if (z == nullptr)
+        if (z == nullptr || !z->allFinite())  // its lagged covariances need complete rows
           throw InputError("ALS needs a measurement at every row: row " + std::to_string(k) +
                            " (line " + std::to_string(k < d.lines.size() ? d.lines[k] : 0) +
                            ") of " + d.path + " has a missing value");

@@ -191,7 +191,8 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
           const InputPath<Model> u(InputFrom<Model>(u0), InputFrom<Model>(u1), t0, t1);
           if (AddTransition(lik, joint, rows[k - 1], rows[k], t0, t1, u, sums)) return true;
           *why = "the smoothed joint covariance of rows " + std::to_string(k - 1) + " and " +
-                 std::to_string(k) + where + " is not positive semidefinite";
+                 std::to_string(k) + where + " (t = " + FormatNumber(t0) + " to " +
+                 FormatNumber(t1) + ") is not positive semidefinite";
           return false;
         },
         [&](size_t k, const Vec<double, Meas::kDim>* z, const double* u) {
@@ -199,7 +200,7 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
               AddMeasurement(lik, state, rows[k], *z, d.t[k], InputFrom<Model>(u), sums))
             return true;
           *why = "the smoothed covariance of row " + std::to_string(k) + where +
-                 " is not positive semidefinite";
+                 " (t = " + FormatNumber(d.t[k]) + ") is not positive semidefinite";
           return false;
         });
     if (!complete) return false;
@@ -314,7 +315,13 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
   double nll = result.nll_initial;
   start->theta_end = theta, start->nll_end = nll;
   result.nll_history.push_back(nll);
-  if (!std::isfinite(nll)) *why = "the filter failed at the initial guess";
+  if (!std::isfinite(nll)) {  // run it again for the step and time where it failed
+    std::string reason;
+    double again = kInf;
+    lik.Nll(theta.data(), &again, &reason);
+    *why = "the filter failed at the initial guess";
+    if (!reason.empty()) *why += ": " + reason;
+  }
   while (why->empty() && start->iterations < options.max_iterations) {
     const auto t_it = Clock::now();
     EmSums<Model::kStateDim, Meas::kDim> sums;
@@ -348,6 +355,24 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
   return false;
 }
 
+// EM's M-step sums need every component of a measured row: a row with some
+// of them missing (the filters' subset update, src/filters/missing.h) is
+// refused, naming the file, line and column.
+template <class Meas>
+void RefusePartialRows(const std::vector<FilterData>& datasets) {
+  for (const FilterData& d : datasets)
+    for (size_t k = 0; k < d.t.size(); ++k) {
+      if (!RowUpdates(d, k)) continue;
+      for (int j = 0; j < Meas::kDim; ++j)
+        if (!std::isfinite(d.z[k * Meas::kDim + size_t(j)]))
+          throw InputError(d.path + ":" + std::to_string(k < d.lines.size() ? d.lines[k] : 0) +
+                           ": z_" + Meas::kOutputs[size_t(j)] +
+                           " is missing in a measured row; the em estimator needs every "
+                           "component of a row or none (the ml estimator updates with the "
+                           "observed ones)");
+    }
+}
+
 template <class Model, class Meas>
 void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, TuneResult* out) {
   const FilterSpec& spec = problem.spec;
@@ -362,6 +387,7 @@ void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, 
             "--estimate-x0 with the em estimator needs the prior at the first row (t0 " +
             FormatNumber(spec.t0) + " is before the first row" +
             (d.path.empty() ? "" : " of " + d.path) + ", t = " + FormatNumber(d.t.front()) + ")");
+  RefusePartialRows<Meas>(problem.datasets);
   TuneStart start;
   start.theta_start = result.theta_initial;
   start.nll_start = result.nll_initial;

@@ -209,8 +209,10 @@ class InnovationLikelihood {
   // (with *why set when non-null) when the filter fails.
   // (The sink is a std::function so that the recursion is compiled once per
   // scalar type, not once per caller.)
+  // observed: the components of z_k the update used (missing.h; the
+  // whitened innovation is 0 in the others).
   template <class T>
-  using Sink = std::function<void(const MeasT<T>& whitened, const T& log_det)>;
+  using Sink = std::function<void(const MeasT<T>& whitened, const T& log_det, int observed)>;
   template <class T>
   bool Run(const T* theta, const Sink<T>& sink, std::string* why = nullptr) const {
     if constexpr (EstimableParams<Model>) {
@@ -227,8 +229,8 @@ class InnovationLikelihood {
     T sum(0.0);
     const bool ok = Run<T>(
         theta,
-        [&](const MeasT<T>& e, const T& log_det) {
-          sum -= GaussianLogLikelihood<kM, T>(e, log_det);
+        [&](const MeasT<T>& e, const T& log_det, int observed) {
+          sum -= GaussianLogLikelihood<kM, T>(e, log_det, observed);
         },
         why);
     phys_.ForEachPriorResidual(theta + NumNoiseParams(), [&](const T& r) { sum += 0.5 * r * r; });
@@ -364,11 +366,7 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
     throw InputError("a fixed R must be positive definite");
   for (const FilterData& d : datasets) {
     long updates = 0;
-    for (size_t k = 0; k < d.t.size(); ++k) {
-      bool all = true;
-      for (int j = 0; j < kM; ++j) all = all && std::isfinite(d.z[k * kM + j]);
-      updates += all;
-    }
+    for (size_t k = 0; k < d.t.size(); ++k) updates += RowUpdates(d, k);
     terms_ += updates - options.burn_in;
   }
   // Each tunable kind's set-up; a kind missing here does not compile.
@@ -498,7 +496,7 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
         T log_det;
         if (!Update<T>(&b, *z, d.t[k], InputFrom<Model>(u), R, p, &e, &log_det, &reason))
           return fail(d, k, "update failed: " + reason);
-        if (update_index >= options_.burn_in) sink(e, log_det);
+        if (update_index >= options_.burn_in) sink(e, log_det, MissingMask<kM>(*z).Observed());
         ++update_index;
       }
       if (!WithinDivergenceGuard<kN, T>(b.x, b.P, spec_.max_cov_trace, &reason))
@@ -637,7 +635,7 @@ void InnovationLikelihood<Model, Meas>::SetUpKf(const KfOptions& options,
                                                 const std::vector<FilterData>& datasets) {
   kf_ = true;
   LinearizedKf<Model, Meas> kf(params_, options);  // throws for a bad x*
-  kf.Initialize(x0_, p0_);
+  kf.Initialize(x0_, p0_);  // h at t = 0: KfLinAt re-linearises an h(t, ...) per update
   kf_lin_ = kf.linearization();
   // Phi, Gamma, d (and Gamma1 for a linear hold) for every step length
   // that Run() will meet.

@@ -100,13 +100,8 @@ const FilterSpec& CheckSpec(const FilterSpec& spec, const TunerOptions& options,
     long updates = 0;
     std::vector<long> finite(Meas::kDim, 0);
     for (size_t k = 0; k < d.t.size(); ++k) {
-      bool all = true;
-      for (int j = 0; j < Meas::kDim; ++j) {
-        const bool f = std::isfinite(d.z[k * Meas::kDim + j]);
-        finite[j] += f;
-        all = all && f;
-      }
-      updates += all;
+      for (int j = 0; j < Meas::kDim; ++j) finite[j] += std::isfinite(d.z[k * Meas::kDim + j]);
+      updates += RowUpdates(d, k);  // the observed components of a partial row update
     }
     for (int j = 0; j < Meas::kDim; ++j) {
       if (finite[j] == 0)

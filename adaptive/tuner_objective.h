@@ -89,7 +89,7 @@ class Objective {
   bool MinLogDet(const double* theta, double* min_log_det) const {
     double lo = kInf;
     const bool ok = lik_.template Run<double>(
-        theta, [&](const Vec<double, kM>&, const double& ld) { lo = std::min(lo, ld); });
+        theta, [&](const Vec<double, kM>&, const double& ld, int) { lo = std::min(lo, ld); });
     *min_log_det = lo;
     return ok && std::isfinite(lo);
   }
@@ -122,7 +122,7 @@ class Objective {
     long at = 0;
     bool positive = true;
     const bool ok =
-        lik_.template Run<T>(theta, [&](const Eigen::Matrix<T, kM, 1>& e, const T& log_det) {
+        lik_.template Run<T>(theta, [&](const Eigen::Matrix<T, kM, 1>& e, const T& log_det, int) {
           using std::sqrt;
           for (int j = 0; j < kM; ++j) residuals[at++] = e(j);
           const T arg = log_det + c;

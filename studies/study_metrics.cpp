@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace estlab {
 
@@ -33,17 +34,21 @@ NoTruthMetrics ComputeNoTruthMetrics(const FilterRunOutput& out,
   NoTruthMetrics m;
   const size_t first = size_t(std::max(0L, skip));
   const int ll = ColumnOf(out, "loglik"), nis = ColumnOf(out, "nis");
+  std::vector<int> nu_columns;
+  for (const std::string& o : outputs) nu_columns.push_back(ColumnOf(out, "nu_" + o));
   double loglik = 0.0, nis_sum = 0.0;
+  long dof = 0;  // the observed components (a missing one's nu is NaN)
   for (size_t k = first; ll >= 0 && nis >= 0 && k < out.rows.size(); ++k) {
     const auto& row = out.rows[k];
     if (!std::isfinite(row[size_t(ll)])) continue;  // no update at this row
     loglik += row[size_t(ll)];
     nis_sum += row[size_t(nis)];
     ++m.updates;
+    for (int c : nu_columns) dof += c < 0 || std::isfinite(row[size_t(c)]);
   }
   m.nll_per_step = m.updates > 0 ? -loglik / double(m.updates) : NAN;
   m.mean_nis = m.updates > 0 ? nis_sum / double(m.updates) : NAN;
-  ChiSquareBounds95(m.updates, int(outputs.size()), m.nis_bounds95);
+  ChiSquareMeanBounds95(m.updates, dof, m.nis_bounds95);
   for (const std::string& o : outputs)
     m.pred_rmse.push_back(RootMeanSquare(out, ColumnOf(out, "nu_" + o), first));
   return m;

@@ -299,7 +299,10 @@ int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
       smooth ? "estlab smooth: run a filter forward, then its smoother backward (RTS for the "
                "Gaussian filters, backward simulation for the particle filter)"
              : "estlab filter: run a Kalman-family or particle filter over a data file");
-  desc.add_options()("help,h", "this text")("data", po::value<std::string>(), "data CSV")(
+  desc.add_options()("help,h", "this text")(
+      "data", po::value<std::string>(),
+      "data CSV: t, z_<output> (an empty cell is a missing component: the row updates with the "
+      "others), the inputs")(
       "out", po::value<std::string>(),
       "per-step output CSV (optional: without it only the summary; never an input file)")(
       "json", "print a JSON summary")(

@@ -83,19 +83,19 @@ class Ekf final : public FilterCommon<Model, Meas> {
       return FailResult(ready, error_);
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status = EkfUpdate<Model, Meas>(x_, P_, z, R, this->time(), transition_->input(), params_,
-                                                       options_.iterations, &u, &why);
+    const FilterStatus status = EkfUpdate<Model, Meas>(
+        x_, P_, z, R, this->time(), transition_->input(), params_, options_.iterations, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation<kM>(u.nu, u.S, u.L, &result);
+    SetInnovation<kM>(u.nu, u.S, u.L, MissingMask<kM>(z), &result);
     x_ = u.x;
     P_ = u.P;
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
-    result.residual = WrapResidual<kM>(
-        z - MeasurementAndJacobian<Model, Meas>(this->time(), x_, transition_->input(), params_,
-                                            nullptr),
-        Meas::kAngleOutputs);
+    result.residual =
+        WrapResidual<kM>(z - MeasurementAndJacobian<Model, Meas>(
+                                 this->time(), x_, transition_->input(), params_, nullptr),
+                         Meas::kAngleOutputs);
     return result;
   }
 

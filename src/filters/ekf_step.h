@@ -9,7 +9,9 @@
 //   H_i = dh/dx(x_i),  S_i = H_i P- H_i^T + R,  K_i = P- H_i^T S_i^-1
 //   x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i wrap(x- - x_i))
 //   x+ = x_iterations,  P+ = (I - K H) P- (I - K H)^T + K R K^T  (last K, H)
-// With iterations = 1 this is the EKF. The innovation nu = wrap(z - h(x-)) and
+// Components of z that are missing (NaN) take no part: the rows of H and nu,
+// R's block of the observed ones (missing.h). With iterations = 1 this is
+// the EKF. The innovation nu = wrap(z - h(x-)) and
 // S are those at the prior (i = 0), so the likelihood is the EKF's whatever
 // the number of iterations.
 //
@@ -52,11 +54,16 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   const Vec<T, M> zt = z.template cast<T>();
+  // the observed components only (missing.h)
+  const MissingMask<M> missing(z);
+  MatT<T, M, M> masked;
+  const MatT<T, M, M>& Ru = missing.Noise(R, &masked);
   MatT<T, M, N> H;
   // i = 0:  nu = wrap(z - h(x-)),  S = H P- H^T + R,  K = P- H^T S^-1
-  out->nu = WrapResidual<M, T>(zt - MeasurementAndJacobian<Model, Meas, T>(t, x_prior, u, params, &H),
-                               Meas::kAngleOutputs);
-  if (!KalmanGain<N, M, T>(H, P, R, &out->S, &out->L, &out->K)) {
+  out->nu = WrapResidual<M, T>(
+      zt - MeasurementAndJacobian<Model, Meas, T>(t, x_prior, u, params, &H), Meas::kAngleOutputs);
+  if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&out->nu);
+  if (!KalmanGain<N, M, T>(H, P, Ru, &out->S, &out->L, &out->K)) {
     *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
     return FilterStatus::kFactorizationFailed;
   }
@@ -64,16 +71,17 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
   MatT<T, M, M> S_i, L_i;
   for (int i = 1; i < iterations; ++i) {
     // x_{i+1} = x- + K_i (wrap(z - h(x_i)) - H_i wrap(x- - x_i))
-    const Vec<T, M> r = WrapResidual<M, T>(
+    Vec<T, M> r = WrapResidual<M, T>(
         zt - MeasurementAndJacobian<Model, Meas, T>(t, x_iter, u, params, &H), Meas::kAngleOutputs);
-    if (!KalmanGain<N, M, T>(H, P, R, &S_i, &L_i, &out->K)) {
+    if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&r);
+    if (!KalmanGain<N, M, T>(H, P, Ru, &S_i, &L_i, &out->K)) {
       *why = "Cholesky of S = H P H^T + R failed in IEKF iteration " + std::to_string(i);
       return FilterStatus::kFactorizationFailed;
     }
     x_iter = x_prior + out->K * (r - H * WrapResidual<N, T>(x_prior - x_iter, Model::kAngleStates));
   }
   // P+ = (I - K H) P- (I - K H)^T + K R K^T with the last K, H
-  out->P = JosephUpdate<N, M, T>(P, out->K, H, R);
+  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru);
   out->x = x_iter;
   if (!BeliefFinite<N, T>(out->x, out->P)) {
     *why = "updated mean or covariance is not finite";

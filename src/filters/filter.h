@@ -56,6 +56,9 @@ struct StepResult {
   Mat<M, M> innovation_cov = Mat<M, M>::Identity();
   double log_likelihood = 0.0;
   double nis = 0.0;
+  // The components of z the update used (missing.h); the others are NaN in
+  // innovation and innovation_cov. NIS has this many degrees of freedom.
+  int observed = M;
   FilterStatus status = FilterStatus::kOk;
   std::string message;  // set when status != kOk
 

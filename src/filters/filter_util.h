@@ -10,7 +10,7 @@
 //   Mat<2, 1> K;
 //   if (!KalmanGain<2, 1>(H, P, R, &S, &L, &K)) return failure;   // S not PD
 //   StepResult<1> r;
-//   SetInnovation<1>(nu, S, L, &r);       // nis, log N(nu; 0, S)
+//   SetInnovation<1>(nu, S, L, MissingMask<1>(z), &r);  // nis, log N(nu; 0, S)
 //   P = JosephUpdate<2, 1>(P, K, H, R);
 //
 // All functions work on fixed-size Eigen types and allocate nothing.
@@ -27,6 +27,7 @@
 
 #include "src/core/types.h"
 #include "src/filters/filter.h"
+#include "src/filters/missing.h"
 
 namespace estlab {
 
@@ -151,24 +152,31 @@ void Whiten(const MatT<T, M, M>& L, const Vec<T, M>& nu, Vec<T, M>* whitened, T*
   for (int i = 0; i < M; ++i) sum += 2.0 * log(L(i, i));
   *log_det = sum;
 }
+// `observed`: the components of z the update used (missing.h: a masked
+// component adds 0 to the whitened norm and to log det S, and nothing to
+// the constant).
 template <int M, class T = double>
-T GaussianLogLikelihood(const Vec<T, M>& whitened, const T& log_det) {
-  return -0.5 * (log_det + whitened.squaredNorm() + M * kLog2Pi);
+T GaussianLogLikelihood(const Vec<T, M>& whitened, const T& log_det, int observed = M) {
+  return -0.5 * (log_det + whitened.squaredNorm() + observed * kLog2Pi);
 }
 
 // Fills the diagnostics of `result` from the innovation nu, its covariance S
-// and the Cholesky factor L of S: nis = nu^T S^-1 nu = |L^-1 nu|^2 and
-// log_likelihood = log N(nu; 0, S).
+// and the Cholesky factor L of S (masked where components of z are missing,
+// missing.h): nis = nu^T S^-1 nu = |L^-1 nu|^2 and log_likelihood =
+// log N(nu; 0, S) over the observed components; the missing ones are NaN in
+// the reported innovation and S.
 template <int M>
 void SetInnovation(const Vec<double, M>& nu, const Mat<M, M>& S, const Mat<M, M>& L,
-                   StepResult<M>* result) {
+                   const MissingMask<M>& missing, StepResult<M>* result) {
   Vec<double, M> whitened;
   double log_det;
   Whiten<M>(L, nu, &whitened, &log_det);
   result->innovation = nu;
   result->innovation_cov = S;
   result->nis = whitened.squaredNorm();
-  result->log_likelihood = GaussianLogLikelihood<M>(whitened, log_det);
+  result->log_likelihood = GaussianLogLikelihood<M>(whitened, log_det, missing.Observed());
+  result->observed = missing.Observed();
+  if (missing.Any()) missing.MarkReported(&result->innovation, &result->innovation_cov);
 }
 
 // A factor L with L L^T = C for a symmetric positive SEMI-definite C (used to

@@ -110,8 +110,8 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk) return ready;
     if (!(dt >= 0.0) || !std::isfinite(dt))
       return Fail(FilterStatus::kNonFinite, "step t1 - t0 is negative or not finite");
-    if (!linear_finite_)
-      return Fail(FilterStatus::kNonFinite, "the linearisation (A, B, c, H) is not finite");
+    if (!dynamics_finite_)
+      return Fail(FilterStatus::kNonFinite, "the linearisation (A, B, c) is not finite");
     Discretize(dt, !(input_ == input_end_));
     // x- = x* + Phi wrap(x - x*) + Gamma (u0 - u*) + Gamma1 (u1 - u0) + d,
     // P- = Phi P Phi^T + Q
@@ -127,18 +127,17 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
   StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
       return FailResult(ready, error_);
-    if constexpr (MeasurementSeesTime<Meas, Model>) {  // h*, H, D at this update's time
+    if constexpr (MeasurementSeesTime<Meas, Model>)  // h*, H, D at this update's time
       KfLinearizeMeasurement<Model, Meas>(this->time(), params_, &lin_);
-      if (!lin_.h_star.allFinite() || !lin_.H.allFinite() || !lin_.D.allFinite())
-        return FailResult(FilterStatus::kNonFinite,
-                          "h(t, x*, u*) or its Jacobians are not finite at this update's time");
-    }
+    if (!lin_.h_star.allFinite() || !lin_.H.allFinite() || !lin_.D.allFinite())
+      return FailResult(FilterStatus::kNonFinite,
+                        "h(t, x*, u*) or its Jacobians H, D are not finite at this update");
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status = KfUpdate<Model, Meas>(lin_, input_, x_, P_, z, R, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation<kM>(u.nu, u.S, u.L, &result);
+    SetInnovation<kM>(u.nu, u.S, u.L, MissingMask<kM>(z), &result);
     x_ = u.x;
     P_ = u.P;
     result.gain = u.K;
@@ -182,8 +181,9 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       c_ = ContinuousRhs<Model>(lin_.x_star, u_star, params_);
     }
     KfLinearizeMeasurement<Model, Meas>(this->time(), params_, &lin_);
-    linear_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite() && lin_.H.allFinite() &&
-                     lin_.h_star.allFinite() && lin_.D.allFinite();
+    // h is checked where it is used (Update): a measurement that sees t may
+    // be undefined at the time of Initialize and fine at every update's.
+    dynamics_finite_ = A_.allFinite() && B_.allFinite() && c_.allFinite();
     cached_dt_ = -1.0;  // invalidate the discretisation cache
   }
 
@@ -240,7 +240,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
 
   Params params_;
   bool fixed_point_ = false;
-  bool linear_finite_ = false;
+  bool dynamics_finite_ = false;
   KfLinearization<kN, kM, kU> lin_;  // x*, u*, h(x*, u*), H, D
   InputOf<Model> input_;
   InputOf<Model> input_end_;  // at the next Predict's end (linear hold)

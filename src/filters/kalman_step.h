@@ -14,6 +14,8 @@
 //   z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
 //   S = H P- H^T + R,  K = P- H^T S^-1
 //   x+ = x- + K nu,  P+ = (I - K H) P- (I - K H)^T + K R K^T   (Joseph form)
+// with the observed components of z only (rows of H and nu, R's block;
+// missing.h) when some are missing (NaN).
 #ifndef ESTLAB_FILTERS_KALMAN_STEP_H_
 #define ESTLAB_FILTERS_KALMAN_STEP_H_
 
@@ -96,21 +98,26 @@ FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim, kInput
                       GaussianUpdate<T, Model::kStateDim, Meas::kDim>* out, std::string* why) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
-  const MatT<T, M, N> H = lin.H.template cast<T>();
+  MatT<T, M, N> H = lin.H.template cast<T>();
   // z^ = h(x*, u*) + H wrap(x- - x*) + D (u - u*),  nu = wrap(z - z^)
   const Vec<T, N> delta =
       WrapResidual<N, T>(x - lin.x_star.template cast<T>(), Model::kAngleStates);
   const Vec<double, M> fed = lin.h_star + lin.D * (InputColumn<Model>(u) - lin.u_star);
   const Vec<T, M> z_pred = fed.template cast<T>() + H * delta;
   out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);
+  // the observed components only (missing.h)
+  const MissingMask<M> missing(z);
+  MatT<T, M, M> masked;
+  const MatT<T, M, M>& Ru = missing.Noise(R, &masked);
+  if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&out->nu);
   // S = H P H^T + R,  K = P H^T S^-1
-  if (!KalmanGain<N, M, T>(H, P, R, &out->S, &out->L, &out->K)) {
+  if (!KalmanGain<N, M, T>(H, P, Ru, &out->S, &out->L, &out->K)) {
     *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
     return FilterStatus::kFactorizationFailed;
   }
   // x+ = x- + K nu;  P+ = (I - K H) P (I - K H)^T + K R K^T
   out->x = x + out->K * out->nu;
-  out->P = JosephUpdate<N, M, T>(P, out->K, H, R);
+  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru);
   if (!BeliefFinite<N, T>(out->x, out->P)) {
     *why = "updated mean or covariance is not finite";
     return FilterStatus::kNonFinite;

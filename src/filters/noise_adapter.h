@@ -1,7 +1,9 @@
 // Online adaptation of the process- and measurement-noise covariances Q and R
 // from each filter step (the "adaptive UKF" = SigmaPointFilter + this).
 //
-// Usage (the runner does this every step):
+// Usage (the runner does this every update whose z is complete; an update
+// with missing components, r.observed < M, adapts nothing: the rules below
+// need every component's innovation):
 //   NoiseAdapter<N, M> adapter(spec.adapt);
 //   P_pred = filter.cov() after Predict;  r = filter.Update(z, R);
 //   adapter.Observe(r, P_pred, filter.cov(), &Q, &R);

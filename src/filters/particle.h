@@ -17,7 +17,8 @@
 // Predict:  x_i <- Phi(x_i) + L_Q e_i,  e_i ~ N(0, I),  L_Q L_Q^T = Q
 //           (Q may be singular or zero: L_Q from an eigendecomposition then)
 // Update (w_i the normalised weights before the update):
-//   log p_i = log N(wrap(z - h(x_i)); 0, R)
+//   log p_i = log N(wrap(z - h(x_i)); 0, R)   (the observed components of z
+//                                               only, R's block: missing.h)
 //   log_likelihood = log sum_i w_i p_i              (log-sum-exp; the exps in
 //                                                    packets for every model, packet.h)
 //   w_i <- w_i p_i / sum_j w_j p_j,  ESS = 1 / sum_i w_i^2
@@ -152,7 +153,12 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
   StepResult<kM> Update(const Measurement& z, const MeasurementCov& R) override {
     if (const FilterStatus ready = this->CheckReady(); ready != FilterStatus::kOk)
       return FailResult(ready, error_);
-    const Eigen::LLT<MeasurementCov> r_llt(R);
+    // the observed components of z only (missing.h): R's observed block,
+    // the missing components' residuals zero
+    const MissingMask<kM> missing(z);
+    MeasurementCov r_scratch;
+    const MeasurementCov& Ru = missing.Noise(R, &r_scratch);
+    const Eigen::LLT<MeasurementCov> r_llt(Ru);
     if (r_llt.info() != Eigen::Success || !R.allFinite())
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the measurement noise R failed (not positive definite)");
@@ -163,11 +169,12 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     Measurement zero_whitened;
     double log_det_r;
     Whiten<kM>(r_lower, Measurement(Measurement::Zero()), &zero_whitened, &log_det_r);
-    const double log_norm = GaussianLogLikelihood<kM>(zero_whitened, log_det_r);
+    const double log_norm =
+        GaussianLogLikelihood<kM>(zero_whitened, log_det_r, missing.Observed());
     EvalMeasurements();
     for (Eigen::Index i = 0; i < n; ++i) {
-      const Measurement nu_i =
-          WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
+      Measurement nu_i = WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
+      if (missing.Any()) missing.MaskRows(&nu_i);
       const Measurement whitened =
           r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
       log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
@@ -176,15 +183,16 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)
     const Measurement z_pred = Mean<kM>(predicted_measurements_);
     MeasurementCov S = WeightedCov<kM>(predicted_measurements_, z_pred, weight_vector());
-    S += R;
+    S += Ru;
     Symmetrize(&S);
+    Measurement nu = WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs);
+    if (missing.Any()) missing.MaskCov(&S), missing.MaskRows(&nu);
     const Eigen::LLT<MeasurementCov> s_llt(S);
     if (s_llt.info() != Eigen::Success)
       return FailResult(FilterStatus::kFactorizationFailed,
                         "Cholesky of the predicted-measurement covariance failed");
     StepResult<kM> result;
-    SetInnovation<kM>(WrapResidual<kM>(z - z_pred, Meas::kAngleOutputs), S,
-                      MeasurementCov(s_llt.matrixL()), &result);
+    SetInnovation<kM>(nu, S, MeasurementCov(s_llt.matrixL()), missing, &result);
     // log_likelihood = log sum_i w_i p_i = m + log sum_i exp(l_i - m) with
     // l_i = log w_i + log p_i, m = max_i l_i (log-sum-exp; one exp per
     // particle, reused for the weights):
@@ -253,10 +261,9 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     const double t = this->time();
     if constexpr (kPacketModel<Model>) {
       for (Eigen::Index first = 0; first < particles_.cols(); first += kPacketWidth)
-        ScatterColumns<kM>(
-            EvalMeasurement<Model, Meas, Packet>(t, GatherColumns<kN>(particles_, first), u,
-                                                 params_),
-            first, &predicted_measurements_);
+        ScatterColumns<kM>(EvalMeasurement<Model, Meas, Packet>(
+                               t, GatherColumns<kN>(particles_, first), u, params_),
+                           first, &predicted_measurements_);
     } else {
       for (Eigen::Index i = 0; i < particles_.cols(); ++i)
         predicted_measurements_.col(i) =

@@ -122,12 +122,12 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     have_propagated_ = false;
     GaussianUpdate<double, kN, kM> u;
     std::string why;
-    const FilterStatus status = SigmaUpdate<Model, Meas>(
-        set_, Y, &measurement_points_, x_, P_, z, R, this->time(), transition_->input(), params_,
-        &u, &why);
+    const FilterStatus status =
+        SigmaUpdate<Model, Meas>(set_, Y, &measurement_points_, x_, P_, z, R, this->time(),
+                                 transition_->input(), params_, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation<kM>(u.nu, u.S, u.L, &result);
+    SetInnovation<kM>(u.nu, u.S, u.L, MissingMask<kM>(z), &result);
     x_ = u.x;
     P_ = u.P;
     result.gain = u.K;

@@ -13,6 +13,8 @@
 //   S = sum_i Wc_i dZ_i dZ_i^T + R + jitter I,   C = sum_i Wc_i dY_i dZ_i^T
 //   K = C S^-1 (Cholesky solve),   nu = wrap(z - z^)
 //   x+ = x- + K nu,   P+ = P- - K S K^T (symmetrised)
+//   with the observed components of z only when some are missing (NaN):
+//   S's block, C's columns and nu's rows of those (missing.h)
 // No difference inside a point set is wrapped (filter_util.h, WeightedMean):
 // only the innovation of angle outputs is.
 //
@@ -94,7 +96,11 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
   out->S += R;
   out->S.diagonal().array() += T(set.jitter);
   Symmetrize<M, T>(&out->S);
-  const MatT<T, N, M> C = WeightedCrossCov<N, M>(Y, x_prior, *Z, z_pred, set.cov_weights);
+  MatT<T, N, M> C = WeightedCrossCov<N, M>(Y, x_prior, *Z, z_pred, set.cov_weights);
+  // the observed components only: rows and columns of S, columns of C
+  // (missing.h)
+  const MissingMask<M> missing(z);
+  if (missing.Any()) missing.MaskCov(&out->S), missing.MaskCols(&C);
   const Eigen::LLT<MatT<T, M, M>> llt(out->S);
   if (llt.info() != Eigen::Success) {
     *why = "Cholesky of the innovation covariance S failed";
@@ -104,6 +110,7 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
   // K = C S^-1, i.e. K^T = S^-1 C^T;  nu = wrap(z - z^)
   out->K = CholeskySolve<M, N, T>(out->L, C.transpose()).transpose();
   out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);
+  if (missing.Any()) missing.MaskRows(&out->nu);
   // x+ = x- + K nu,  P+ = P- - K S K^T
   out->x = x_prior + out->K * out->nu;
   out->P = P - out->K * out->S * out->K.transpose();

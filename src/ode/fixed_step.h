@@ -23,6 +23,9 @@
 
 namespace estlab {
 
+template <int K, int N>
+struct NestedJet;  // src/ode/nested_jet.h
+
 namespace fixed_step_detail {
 
 // One step of `scheme` with the input given by `u_at(t)` at each stage time.
@@ -59,17 +62,24 @@ Vec<T, Model::kStateDim> Step(Integrator scheme, const Vec<T, Model::kStateDim>&
 // Step with everything it calls inlined (the model's Rhs, the vector sums):
 // GCC's unit-growth limit otherwise decides; in a large translation unit
 // (bench/filter_bench.cpp) it kept Rhs<Jet> as a call: +24 % per EKF step
-// of the two-input cart (bench/results/input_hold.md). Only for the filters'
-// own step (double and first-order Jets, the model's Params), not for nested
-// Jets (GCC 12: internal compiler error on a large model). Not yet decided
-// for ParamsT<Jet>: the compile saving is unmeasured, the tuner gradient
-// 1.11 vs 1.07 x dd92e03 flattened (input_hold.md "Stop 52"; next stop).
+// of the two-input cart (bench/results/input_hold.md). For
+//   - the filters' own step: double and first-order Jets, the model's Params;
+//   - the tuner's EKF flow Jacobian, NestedJet<K, N>, for N <= 4 states:
+//     0.54 x the Ir per gradient of the pendulum's EKF (input_hold.md
+//     "Stop 53"); GCC 12 stops with an internal compiler error at
+//     NestedJet<4, 6> (the DIPC's tuner), and the double pendulum's tuner
+//     (N = 4) compiles in 1.16 x the time.
 template <class T>
 inline constexpr bool kFlatScalar = std::is_same_v<T, double>;
 template <template <class, int> class Jet, int N>
 inline constexpr bool kFlatScalar<Jet<double, N>> = true;
+template <class T>
+inline constexpr bool kFlatNested = false;
+template <int K, int N>
+inline constexpr bool kFlatNested<NestedJet<K, N>> = N <= 4;
 template <class Model, class T, class Prm>
-inline constexpr bool kFlatStep = kFlatScalar<T> && std::is_same_v<Prm, typename Model::Params>;
+inline constexpr bool kFlatStep =
+    (kFlatScalar<T> && std::is_same_v<Prm, typename Model::Params>) || kFlatNested<T>;
 
 template <class Model, class T, class Prm, class InputAt>
 [[gnu::flatten]] Vec<T, Model::kStateDim> FlatStep(Integrator scheme,

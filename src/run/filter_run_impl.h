@@ -334,6 +334,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   std::vector<RowRecord<N, M>> records;
   records.reserve(data.t.size());
   double nis_sum = 0.0;
+  long nis_dof = 0;  // the observed components over all updates
   DegeneracyMonitor degeneracy;
 
   auto fail = [&](size_t k, const std::string& what) {
@@ -373,13 +374,15 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
       // A finite but absurd measurement (1e308) can make the statistics
       // overflow while the filter itself reports success: that is a
       // divergence too, not a result.
-      if (!r.innovation.allFinite() || !std::isfinite(r.nis) || !std::isfinite(r.log_likelihood))
+      if (!InnovationFinite<M>(*z, r.innovation) || !std::isfinite(r.nis) ||
+          !std::isfinite(r.log_likelihood))
         return fail(k, "the innovation statistics are not finite (NIS " + FormatNumber(r.nis) +
                            ", log-likelihood " + FormatNumber(r.log_likelihood) +
                            "): a measurement far outside the filter's range");
       ++s.updates;
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
+      nis_dof += r.observed;
       rec.nu = r.innovation;
       rec.S = r.innovation_cov;
       rec.nis = r.nis;
@@ -387,7 +390,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
       int particles = 0;
       if (filter->EffectiveSampleSize(&ess, &particles)) degeneracy.Observe(ess, particles, k);
       rec.loglik = r.log_likelihood;
-      if (adapter) {
+      if (adapter && r.observed == M) {  // adapts on complete rows only (noise_adapter.h)
         adapter->Observe(r, p_pred, filter->cov(), &Q, &R);
         if (spec.adapt.adapt_q) q_adapted = true;
       }
@@ -404,7 +407,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   ForEachStep<M>(spec, data, predict, row);
 
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
-  ChiSquareBounds95(s.updates, M, s.nis_bounds95);
+  ChiSquareMeanBounds95(s.updates, nis_dof, s.nis_bounds95);
   if (adapter) s.adapt_clips = adapter->clip_count();
   if (degeneracy.observed()) ReportDegeneracy(degeneracy, data, &s);
   s.final_q.assign(Q.data(), Q.data() + N * N);  // symmetric: storage order irrelevant

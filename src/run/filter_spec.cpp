@@ -39,12 +39,15 @@ std::string FilterOfSmoother(const std::string& name) {
 }
 
 void ChiSquareBounds95(long steps, int dim, double bounds[2]) {
-  if (steps <= 0 || dim <= 0) {
+  ChiSquareMeanBounds95(steps, steps * long(dim), bounds);
+}
+
+void ChiSquareMeanBounds95(long steps, long dof, double bounds[2]) {
+  if (steps <= 0 || dof <= 0) {
     bounds[0] = bounds[1] = 0.0;
     return;
   }
-  const double dof = double(steps) * dim;
-  boost::math::chi_squared dist(dof);
+  const boost::math::chi_squared dist{double(dof)};
   bounds[0] = boost::math::quantile(dist, 0.025) / double(steps);
   bounds[1] = boost::math::quantile(dist, 0.975) / double(steps);
 }

@@ -64,7 +64,7 @@ struct FilterData {
   std::vector<double> t;
   std::vector<long> lines;  // source line of each row, for messages
   int m = 0;
-  std::vector<double> z;  // rows x m, NaN = missing (no update)
+  std::vector<double> z;  // rows x m, NaN = missing (the observed components update)
   bool has_truth = false;
   std::vector<double> truth;  // rows x n
   int nu = 0;                 // input columns (0: none, the spec's constant input)
@@ -127,6 +127,9 @@ std::string FilterOfSmoother(const std::string& name);
 // Two-sided 95 % bounds of the K-step time average of a d-dimensional
 // chi-square statistic: K * mean ~ chi2(K d).
 void ChiSquareBounds95(long steps, int dim, double bounds[2]);
+// The same with `dof` degrees of freedom over the K steps in all (the NIS
+// of updates with missing components: the observed ones per step).
+void ChiSquareMeanBounds95(long steps, long dof, double bounds[2]);
 
 }  // namespace estlab
 

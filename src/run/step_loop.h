@@ -9,9 +9,11 @@
 //                     spec.transition.input_hold = linear (the line between
 //                     the samples, src/ode/input_path.h); row 0's input
 //                     before the first row
-//   then visit the row with z_k, or with no measurement when any component
-//   of z_k is missing (NaN): no update then; with the input u_k, which a
-//   measurement h(t, x, u) sees at the row's time t_k.
+//   then visit the row with z_k (NaN in the components that are missing:
+//   the filters update with the observed ones, src/filters/missing.h), or
+//   with no measurement when every component is missing: no update then;
+//   with the input u_k, which a measurement h(t, x, u) sees at the row's
+//   time t_k.
 // An input is a pointer to nu values (InputAtRow: the data's input columns,
 // else spec.input), or null for the zero input; InputFrom<Model>(u)
 // (models/model.h) makes it the model's input.
@@ -58,6 +60,13 @@ inline std::string CheckInputWidths(const FilterSpec& spec, const FilterData& da
   return "";
 }
 
+// Whether row k of `data` updates: some component of z_k is observed.
+inline bool RowUpdates(const FilterData& data, size_t k) {
+  for (int j = 0; j < data.m; ++j)
+    if (std::isfinite(data.z[k * size_t(data.m) + size_t(j)])) return true;
+  return false;
+}
+
 template <int M, class PredictFn, class RowFn>
 bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& predict, RowFn&& row) {
   const size_t rows = data.t.size();
@@ -71,10 +80,10 @@ bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& pre
     }
     t_prev = t;
     Vec<double, M> z;
-    bool have_z = true;
+    bool have_z = false;
     for (int j = 0; j < M; ++j) {
       z(j) = data.z[k * M + j];
-      if (!std::isfinite(z(j))) have_z = false;
+      if (std::isfinite(z(j))) have_z = true;
     }
     if (!row(k, have_z ? &z : nullptr, InputAtRow(spec, data, k))) return false;
   }

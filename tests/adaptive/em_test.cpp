@@ -306,6 +306,35 @@ TEST(EmLinear, InitialStatesReachTheLikelihoodTunersOptimum) {
       << error;
 }
 
+// A filter that fails at the initial guess (a gap of 1e6 s in the record: the
+// EKF's RK4 step overflows) ends EM with the step and the time where it
+// failed (issue 40, item 19: it said "stopped at iteration 1" and no more).
+TEST(EmInput, AFailureAtTheInitialGuessNamesTheStepAndTime) {
+  using P = models::Pendulum;
+  std::vector<FilterData> data = {
+      Simulate<P, P::Sin>(Integrator::kRk4, Vec<double, 2>(testing::kPi / 4, 0.0), 0.01, 50,
+                          Vec<double, 2>(1e-6, 1e-4).asDiagonal(), Mat<1, 1>::Constant(0.01), 7)};
+  for (size_t k = 20; k < data[0].t.size(); ++k) data[0].t[k] += 1e6;
+  FilterSpec spec;
+  spec.measurement = "sin";
+  spec.filter = EkfOptions{};
+  spec.transition.integrator = Integrator::kRk4;
+  spec.x0 = {testing::kPi / 4, 0.0};
+  spec.p0 = {1e-4, 0.0, 0.0, 1e-4};
+  spec.q = {1e-4, 0.0, 0.0, 1e-2};
+  spec.r = {0.01};
+  TunerOptions em;
+  em.estimator = Estimator::kEm;
+  em.q_param = NoiseParam::kDiag;
+  em.r_param = NoiseParam::kDiag;
+  const TuneResult e = TuneWith<P, P::Sin>(spec, em, data);
+  EXPECT_FALSE(e.IsSolutionUsable());
+  EXPECT_EQ(e.status, TuneStatus::kAllStartsFailed);
+  EXPECT_NE(e.message.find("initial guess"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("at step 20"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("(t = 1"), std::string::npos) << e.message;
+}
+
 TEST(EmInput, OptionsEmDoesNotTakeAreRefused) {
   TunerOptions em;
   em.estimator = Estimator::kEm;

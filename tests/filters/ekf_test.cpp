@@ -162,11 +162,16 @@ TEST(EkfTest, FailuresAreStatuses) {
     EXPECT_NE(r.message.find("S = H P H^T + R"), std::string::npos) << r.message;
     EXPECT_TRUE((ekf.mean() == Vec<double, 2>(1, 0)));  // unchanged
   }
-  {  // a NaN measurement
+  {  // a NaN measurement is a missing one (src/filters/missing.h): the
+     // update with no component observed changes nothing
     Ekf<Osc, Osc::Position> ekf(transition.get(), params, EkfOptions{});
     ekf.Initialize(Vec<double, 2>(1, 0), 0.1 * Mat<2, 2>::Identity());
     const StepResult<1> r = ekf.Update(Vec<double, 1>(std::nan("")), Mat<1, 1>::Constant(0.1));
-    EXPECT_EQ(r.status, FilterStatus::kNonFinite);
+    EXPECT_EQ(r.status, FilterStatus::kOk);
+    EXPECT_EQ(r.observed, 0);
+    EXPECT_EQ(r.log_likelihood, 0.0);
+    EXPECT_TRUE((ekf.mean() == Vec<double, 2>(1, 0)));
+    EXPECT_TRUE((ekf.cov() == 0.1 * Mat<2, 2>::Identity()));
   }
   {  // the integrator fails
     ThrowingTransition<Osc> throwing(params);

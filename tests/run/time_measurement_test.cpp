@@ -107,7 +107,20 @@ struct Drift {
       return Vec<T, 1>(cos(p.w * t) * x(0) + sin(p.w * t) * x(1));
     }
   };
-  using Measurements = std::tuple<Sensor, Rot>;
+  // clock: h(t, x) = x1 + log(t), undefined at t = 0 (a record starting at
+  // t = 1 never asks for it there).
+  struct Clock {
+    static constexpr const char* kName = "clock";
+    static constexpr int kDim = 1;
+    static constexpr std::array<const char*, 1> kOutputs = {"c"};
+    static constexpr std::array<bool, 1> kAngleOutputs = {false};
+    template <class T>
+    static Vec<T, 1> Eval(const T& t, const Vec<T, 2>& x, double /*u*/, const Params& /*p*/) {
+      using std::log;
+      return Vec<T, 1>(x(0) + log(t));
+    }
+  };
+  using Measurements = std::tuple<Sensor, Rot, Clock>;
 };
 
 static_assert(DynamicModel<Drift> && kAllMeasurementsOf<Drift>);
@@ -394,6 +407,38 @@ TEST(TimeMeasurement, TunerGradientMatchesCentralDifferences) {
     ASSERT_EQ(lik.NumParams(), 4);
     testing::CheckGradient(lik, seed++, "time measurement");
   }
+}
+
+// A measurement undefined at t = 0 on a record that starts at t = 1: the KF
+// run equals the hand KF, and the tuner's likelihood (whose set-up
+// linearises the KF before it knows a row's time) is minus its
+// log-likelihood; it used to refuse the model as "not finite at the
+// operating point".
+TEST(TimeMeasurement, KfLikelihoodOfAMeasurementUndefinedAtTimeZero) {
+  Record r = MakeRecord(60);
+  for (double& t : r.t) t += 1.0;
+  for (size_t k = 0; k < r.t.size(); ++k)
+    r.z_rot[k] = r.x[k](0) + std::log(r.t[k]) + 0.01 * (k % 3);
+  FilterSpec spec = DriftSpec(KfOptions{}, true);
+  spec.measurement = "clock";
+  const FilterData data = SensorData(r, true);
+  const FilterRunOutput out = RunFilterWith<Drift, Drift::Clock>(spec, data);
+  ASSERT_TRUE(out.summary.ok) << out.summary.message;
+  const std::vector<HandStep> hand = HandFilter<1>(
+      r, Mat<1, 1>::Constant(0.01),
+      [&](size_t k, const V2& x) { return Vec<double, 1>(r.z_rot[k] - x(0) - std::log(r.t[k])); },
+      [](size_t, const V2&) { return Mat<1, 2>(1.0, 0.0); });
+  EXPECT_LT(WorstEstimate(out, hand), 1e-10);
+  EXPECT_NEAR(out.summary.loglik, SumLoglik(hand), 1e-10 * std::abs(SumLoglik(hand)));
+  TunerOptions options;
+  options.q_param = NoiseParam::kFixed;
+  options.r_param = NoiseParam::kFixed;
+  const std::vector<FilterData> datasets = {data};  // the likelihood keeps pointers to them
+  const InnovationLikelihood<Drift, Drift::Clock> lik(spec, options, datasets);
+  double nll = 0.0;
+  std::string why;
+  ASSERT_TRUE(lik.Nll<double>(lik.InitialTheta().data(), &nll, &why)) << why;
+  EXPECT_NEAR(nll, -out.summary.loglik, 1e-10 * std::abs(nll));
 }
 
 // The particle filter evaluates h at each row's time: on the linear rot
