@@ -2,7 +2,7 @@
 // that ceres::Jet gives its exact gradient in the noise parameters theta.
 //
 //   NLL(theta) = 1/2 sum_datasets sum_{k >= burn_in}
-//                [ log det S_k + nu_k^T S_k^-1 nu_k + m log 2 pi ]
+//                [ log det S_k + nu_k^T S_k^-1 nu_k + m_k log 2 pi ]  (m_k observed)
 //
 // The filter starts each dataset from the prior mean x0 (the spec's, or
 // its first sample) with covariance P0; the initial states named in

@@ -57,7 +57,7 @@ theta=0.0174533*angle_deg; a and b numbers or pi). Truth: columns named like the
 are the truth only when the file says so (d.csv.json, written by 'estlab simulate') or
 --truth theta,omega names them (--no-truth: never); then the errors, RMSE/MAE and NEES
 are computed, and the summary says which columns were used. An empty or NaN measurement cell
-means no update at that time. Models with an input read the input's column (named
+is missing: the row updates with its other components (docs/multirate.md). Models with an input read the input's column (named
 as the model's input, or 'u'; --column maps another), held constant from each row to
 the next (zero-order hold); without the column, --input must give a constant. The
 prior holds at --t0 (default: the first row's time; a --t0 later than

@@ -6,7 +6,7 @@
 // Per step k (time t_k):
 //   Q_k = Q, or qc * Q_wa(t_k - t_{k-1})       (white-noise acceleration)
 //   predict from t_{k-1} to t_k (none for the first row unless --t0 < t_0)
-//   update with z_k (skipped when any z_k component is missing)
+//   update with the observed components of z_k (none observed: no update)
 //   nis_k = nu^T S^-1 nu,  loglik_k = log N(nu; 0, S)
 //   particle filters: ESS_k, the degeneracy check (degeneracy.h)
 //   with truth: e_k = x_k - x^_k (angles wrapped), nees_k = e^T P^-1 e

@@ -5,8 +5,9 @@
 //     of the particle filter, for each of the six partial patterns of a
 //     three-output measurement, equals the same kind's update with a
 //     measurement model that has only the observed outputs (Sub below): the
-//     posterior, the log-likelihood and NIS; the missing components are NaN
-//     in the reported innovation;
+//     posterior, the log-likelihood, NIS, the reported innovation and S
+//     (the missing components' rows and columns NaN), also for an angle
+//     output whose innovation wraps;
 //   * the KF and EKF updates also equal a hand Kalman update with the
 //     observed rows H_o, R_oo (dynamic sizes, written out here) to 1e-12;
 //   * a KF run over a record with every pattern and some empty rows equals a
@@ -105,7 +106,18 @@ struct Osc {
       return Vec<T, 3>(x(0), sin(x(1)), x(0) * x(1));
     }
   };
-  using Measurements = std::tuple<Lin3, Nl3>;
+  // ang3: nl3 with its first output an angle (innovations wrapped).
+  struct Ang3 {
+    static constexpr const char* kName = "ang3";
+    static constexpr int kDim = 3;
+    static constexpr std::array<const char*, 3> kOutputs = {"a", "b", "c"};
+    static constexpr std::array<bool, 3> kAngleOutputs = {true, false, false};
+    template <class T>
+    static Vec<T, 3> Eval(const Vec<T, 2>& x, const Params& p) {
+      return Nl3::Eval<T>(x, p);
+    }
+  };
+  using Measurements = std::tuple<Lin3, Nl3, Ang3>;
 };
 
 // The outputs of Base whose bit is set in Mask, as a measurement of its own:
@@ -118,13 +130,22 @@ constexpr std::array<const char*, size_t(D)> Pick(const std::array<const char*, 
     if ((mask >> j) & 1) out[i++] = a[size_t(j)];
   return out;
 }
+template <int D>
+constexpr std::array<bool, size_t(D)> PickFlags(const std::array<bool, 3>& a, int mask) {
+  std::array<bool, size_t(D)> out{};
+  size_t i = 0;
+  for (int j = 0; j < 3; ++j)
+    if ((mask >> j) & 1) out[i++] = a[size_t(j)];
+  return out;
+}
 template <class Base, int Mask>
 struct Sub {
   static constexpr const char* kName = "sub";
   static constexpr int kDim = std::popcount(unsigned(Mask));
   static constexpr std::array<const char*, size_t(kDim)> kOutputs =
       Pick<kDim>(Base::kOutputs, Mask);
-  static constexpr std::array<bool, size_t(kDim)> kAngleOutputs = {};
+  static constexpr std::array<bool, size_t(kDim)> kAngleOutputs =
+      PickFlags<kDim>(Base::kAngleOutputs, Mask);
   template <class T>
   static Vec<T, kDim> Eval(const Vec<T, 2>& x, const Osc::Params& p) {
     const Vec<T, 3> full = Base::template Eval<T>(x, p);
@@ -139,6 +160,7 @@ struct Sub {
 const V2 kX(0.4, -0.7);
 const M2 kP = (M2() << 0.3, 0.05, 0.05, 0.2).finished();
 const V3 kZ(0.55, -0.45, 1.6);
+const V3 kZWrapped(0.55 - 2.0 * 3.14159265358979323846, -0.45, 1.6);  // ang3: wraps to 0.15
 const M3 kR = (M3() << 0.02, 0.004, 0.0, 0.004, 0.03, 0.002, 0.0, 0.002, 0.05).finished();
 
 std::vector<int> ObservedOf(int mask) {
@@ -154,6 +176,7 @@ struct Outcome {
   M2 P;
   double loglik = 0.0, nis = 0.0;
   Vec<double, 3> nu;
+  Mat<3, 3> S;  // the reported innovation covariance (NaN beyond kDim)
   int observed = 0;
 };
 
@@ -176,7 +199,11 @@ Outcome OneUpdate(const FilterKindOptions& kind, const Vec<double, Meas::kDim>& 
   o.loglik = r.log_likelihood;
   o.nis = r.nis;
   o.nu.setConstant(kNaN);
-  for (int j = 0; j < Meas::kDim; ++j) o.nu(j) = r.innovation(j);
+  o.S.setConstant(kNaN);
+  for (int j = 0; j < Meas::kDim; ++j) {
+    o.nu(j) = r.innovation(j);
+    for (int i = 0; i < Meas::kDim; ++i) o.S(i, j) = r.innovation_cov(i, j);
+  }
   o.observed = r.observed;
   return o;
 }
@@ -184,17 +211,17 @@ Outcome OneUpdate(const FilterKindOptions& kind, const Vec<double, Meas::kDim>& 
 // The full measurement with the components not in `mask` missing, against
 // Sub<Base, Mask> with only the observed ones.
 template <class Base, int Mask>
-void CheckPattern(const FilterKindOptions& kind, double tol) {
+void CheckPattern(const FilterKindOptions& kind, double tol, const V3& z_full) {
   using S = Sub<Base, Mask>;
   constexpr int D = S::kDim;
   const std::vector<int> idx = ObservedOf(Mask);
-  V3 z = kZ;
+  V3 z = z_full;
   for (int j = 0; j < 3; ++j)
     if (!((Mask >> j) & 1)) z(j) = kNaN;
   Vec<double, D> z_o;
   Mat<D, D> R_o;
   for (int a = 0; a < D; ++a) {
-    z_o(a) = kZ(idx[size_t(a)]);
+    z_o(a) = z_full(idx[size_t(a)]);
     for (int b = 0; b < D; ++b) R_o(a, b) = kR(idx[size_t(a)], idx[size_t(b)]);
   }
   const Outcome full = OneUpdate<Base>(kind, z, kR);
@@ -205,24 +232,30 @@ void CheckPattern(const FilterKindOptions& kind, double tol) {
   EXPECT_NEAR(full.loglik, sub.loglik, tol * std::max(1.0, std::abs(sub.loglik)));
   EXPECT_NEAR(full.nis, sub.nis, tol * std::max(1.0, sub.nis));
   EXPECT_EQ(full.observed, D);
-  for (int j = 0, a = 0; j < 3; ++j) {
-    if ((Mask >> j) & 1) {
-      EXPECT_NEAR(full.nu(j), sub.nu(a++), tol);
-    } else {
+  // The reported innovation and S: the observed ones equal the reduced
+  // update's, the missing rows and columns are NaN (empty cells in the CSV).
+  for (int j = 0; j < 3; ++j) {
+    const auto a = std::find(idx.begin(), idx.end(), j);
+    if (a == idx.end()) {
       EXPECT_TRUE(std::isnan(full.nu(j))) << "component " << j;
+      EXPECT_TRUE(full.S.row(j).array().isNaN().all() && full.S.col(j).array().isNaN().all());
+      continue;
     }
+    EXPECT_NEAR(full.nu(j), sub.nu(int(a - idx.begin())), tol);
+    for (int i = 0; i < D; ++i)
+      EXPECT_NEAR(full.S(idx[size_t(i)], j), sub.S(i, int(a - idx.begin())), tol);
   }
 }
 
 template <class Base>
-void CheckEveryPattern(const FilterKindOptions& kind, double tol) {
-  CheckPattern<Base, 1>(kind, tol);
-  CheckPattern<Base, 2>(kind, tol);
-  CheckPattern<Base, 3>(kind, tol);
-  CheckPattern<Base, 4>(kind, tol);
-  CheckPattern<Base, 5>(kind, tol);
-  CheckPattern<Base, 6>(kind, tol);
-  CheckPattern<Base, 7>(kind, tol);
+void CheckEveryPattern(const FilterKindOptions& kind, double tol, const V3& z = kZ) {
+  CheckPattern<Base, 1>(kind, tol, z);
+  CheckPattern<Base, 2>(kind, tol, z);
+  CheckPattern<Base, 3>(kind, tol, z);
+  CheckPattern<Base, 4>(kind, tol, z);
+  CheckPattern<Base, 5>(kind, tol, z);
+  CheckPattern<Base, 6>(kind, tol, z);
+  CheckPattern<Base, 7>(kind, tol, z);
 }
 
 std::vector<FilterKindOptions> GaussianKinds() {
@@ -239,6 +272,7 @@ TEST(SubsetUpdate, EveryKindEqualsItsUpdateWithTheObservedOutputsAlone) {
     SCOPED_TRACE(FilterKindName(KindOf(kind)));
     CheckEveryPattern<Osc::Lin3>(kind, 1e-12);
     CheckEveryPattern<Osc::Nl3>(kind, 1e-10);
+    CheckEveryPattern<Osc::Ang3>(kind, 1e-10, kZWrapped);  // an angle output that wraps
   }
   // The particle filter: the same particles (same seed), weighted by the
   // observed components.
@@ -303,7 +337,7 @@ TEST(SubsetUpdate, EkfEqualsTheHandKalmanUpdateOnTheObservedRows) {
 }
 
 // ---------------------------------------------------------------------------
-// A record with every pattern: rows cycle through the masks 7, 1, ..., 6, 0
+// A record with every pattern: rows cycle through the masks 7, 0, 1, ..., 6
 // (0: nothing observed, no update), on an uneven grid.
 
 M2 StepMatrix(double dt, const Osc::Params& p) {
@@ -554,8 +588,8 @@ TEST(SubsetUpdate, EmAndAlsRefuseARowWithSomeComponentsMissing) {
     TuneWith<Osc, Osc::Lin3>(spec, em, datasets);
     ADD_FAILURE() << "EM took a partial row";
   } catch (const InputError& e) {
-    // row 1 is the first partial one (mask 0 has nothing: row 1 is
-    // skipped; row 2 has only a): line 4, z_b missing
+    // row 0 is complete, row 1 has nothing (no update), row 2 only a: the
+    // first partial row, line 4, z_b missing
     EXPECT_NE(std::string(e.what()).find("subset.csv:4: z_b is missing"), std::string::npos)
         << e.what();
   }
