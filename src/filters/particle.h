@@ -169,8 +169,7 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     Measurement zero_whitened;
     double log_det_r;
     Whiten<kM>(r_lower, Measurement(Measurement::Zero()), &zero_whitened, &log_det_r);
-    const double log_norm =
-        GaussianLogLikelihood<kM>(zero_whitened, log_det_r, missing.Observed());
+    const double log_norm = GaussianLogLikelihood<kM>(zero_whitened, log_det_r, missing.Observed());
     EvalMeasurements();
     for (Eigen::Index i = 0; i < n; ++i) {
       Measurement nu_i = WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
