@@ -352,7 +352,8 @@ InnovationLikelihood<Model, Meas>::InnovationLikelihood(const FilterSpec& spec,
          likelihood_internal::Pairs<Model>(), likelihood_internal::InitialQ<Model>(spec),
          likelihood_internal::MedianStep(datasets.front())),
       r_(options.r_param, "r", likelihood_internal::OutputNames<Meas>(), {},
-         likelihood_internal::InitialFromVector<kM>(spec.r, "R"), 0.0) {
+         likelihood_internal::InitialFromVector<kM>(spec.r, "R"), 0.0,
+         likelihood_internal::RBlocks<Meas>(options)) {
   for (const FilterData& d : datasets) datasets_.push_back(&d);
   x0s_ = ResolveInitialStates(options.estimate_x0, options.x0_per_file, datasets.size(),
                               likelihood_internal::StateNames<Model>(), Model::kName);

@@ -13,6 +13,7 @@
 
 #include "adaptive/noise_param.h"
 #include "adaptive/tuner.h"
+#include "models/model.h"
 #include "src/core/types.h"
 #include "src/run/filter_spec.h"
 #include "src/run/step_loop.h"
@@ -74,6 +75,39 @@ std::vector<std::string> OutputNames() {
   std::vector<std::string> out;
   for (const char* s : Meas::kOutputs) out.push_back(s);
   return out;
+}
+
+// R's blocks for options.r_param_groups (one per sensor group of Meas, in
+// output order), or none; throws InputError naming an unknown, repeated or
+// missing group.
+template <class Meas>
+std::vector<CovarianceBlock> RBlocks(const TunerOptions& options) {
+  if (options.r_param_groups.empty()) return {};
+  std::string known;
+  for (const OutputGroupSpec& g : MeasurementGroups<Meas>())
+    known += (known.empty() ? "" : ", ") + std::string(g.name);
+  if (known.empty()) {
+    throw InputError(std::string("--r-param: measurement '") + Meas::kName +
+                     "' has no sensor groups: give one kind for all of R");
+  }
+  for (const auto& [name, kind] : options.r_param_groups) {
+    bool found = false;
+    for (const OutputGroupSpec& g : MeasurementGroups<Meas>()) found = found || name == g.name;
+    if (!found)
+      throw InputError("--r-param: unknown sensor group '" + name + "' (groups of " + Meas::kName +
+                       ": " + known + ")");
+  }
+  std::vector<CovarianceBlock> blocks;
+  for (const OutputGroupSpec& g : MeasurementGroups<Meas>()) {
+    const NoiseParam* kind = nullptr;
+    for (const auto& [name, k] : options.r_param_groups)
+      if (name == g.name) kind = &k;
+    if (kind == nullptr)
+      throw InputError(std::string("--r-param: no kind for sensor group '") + g.name +
+                       "' (give every group of " + Meas::kName + ": " + known + ")");
+    blocks.push_back({*kind, g.first, g.count, g.name});
+  }
+  return blocks;
 }
 
 // Checks the spec before anything is built from it.

@@ -9,6 +9,8 @@
 //                [dt^2/2, dt]] on each (position, rate) pair
 //   scalar       D = exp(theta) I
 //   fixed        D = the initial matrix (or qc Q_wa(dt)), no parameters
+//   blockwise    R = blockdiag(R_g), one block per sensor group, each of
+//                the kinds above but white-accel (CovarianceBlock)
 //
 // Usage:
 //   CovarianceParam<2> q(NoiseParam::kWhiteAccel, "q", names, pairs, initial);
@@ -38,75 +40,64 @@ struct InitialCovariance {
   double qc = 0.0;
 };
 
+// One diagonal block of a blockwise covariance (one sensor group's R):
+// rows and columns [first, first + count) with their own parameterisation
+// (diag, full, scalar or fixed); the entries between blocks are 0.
+struct CovarianceBlock {
+  NoiseParam kind = NoiseParam::kDiag;
+  int first = 0;
+  int count = 0;
+  std::string label;  // the group's name, for scalar parameters ("log r_imu")
+};
+
 template <int D>
 class CovarianceParam {
  public:
   // `symbol` is "q" or "r" (for names and messages), `component_names` the
   // state or output names, `pairs` the (position, rate) pairs for white-accel,
   // `dt_ref` the step at which a white-accel initial value is turned into a
-  // matrix for the other parameterisations. Throws InputError when `kind`
-  // does not fit the initial value.
+  // matrix for the other parameterisations. `blocks` (R only): one per sensor
+  // group, covering 0..D-1 in order; empty: one block of `kind`. Throws
+  // InputError when a kind does not fit the initial value.
   CovarianceParam(NoiseParam kind, const std::string& symbol,
                   const std::vector<std::string>& component_names,
                   const std::vector<std::pair<int, int>>& pairs,
-                  const InitialCovariance<D>& initial, double dt_ref)
-      : kind_(kind), symbol_(symbol), names_(component_names), pairs_(pairs), initial_(initial) {
+                  const InitialCovariance<D>& initial, double dt_ref,
+                  std::vector<CovarianceBlock> blocks = {})
+      : kind_(kind), symbol_(symbol), names_(component_names), pairs_(pairs), initial_(initial),
+        blocks_(std::move(blocks)) {
     const std::string what = symbol == "q" ? "Q" : "R";
     const Mat<D, D> m0 = initial.white_accel ? WhiteAccel(initial.qc, dt_ref) : initial.matrix;
     if (!m0.allFinite()) throw InputError("the initial " + what + " is not finite");
-    switch (kind) {
-      case NoiseParam::kDiag:
-        for (int i = 0; i < D; ++i) {
-          if (!(m0(i, i) > 0)) {
-            throw InputError("diag tuning of " + what + " needs a positive initial diagonal, got " +
-                             what + "(" + names_[i] + ", " + names_[i] +
-                             ") = " + FormatNumber(m0(i, i)));
-          }
-          theta0_.push_back(std::log(m0(i, i)));
-          AddName("log " + symbol + "_" + names_[i], true);
-        }
-        break;
-      case NoiseParam::kFull: {
-        const Eigen::LLT<Mat<D, D>> llt(m0);
-        if (llt.info() != Eigen::Success || !(m0.diagonal().minCoeff() > 0)) {
-          throw InputError("full (log-Cholesky) tuning of " + what +
-                           " needs a positive definite initial matrix");
-        }
-        const Mat<D, D> L = llt.matrixL();
-        for (int i = 0; i < D; ++i) {
-          for (int j = 0; j < i; ++j) {
-            theta0_.push_back(L(i, j));
-            AddName("L" + symbol + "(" + names_[i] + "," + names_[j] + ")", false);
-            off_row_.back() = i;
-          }
-          theta0_.push_back(std::log(L(i, i) * L(i, i)));
-          AddName("log L" + symbol + "(" + names_[i] + "," + names_[i] + ")^2", true);
-        }
-        break;
+    if (kind == NoiseParam::kWhiteAccel) {
+      if (pairs.empty()) {
+        throw InputError(
+            "white-accel applies to the process noise Q only (it needs the "
+            "model's position/rate pairs)");
       }
-      case NoiseParam::kWhiteAccel:
-        if (pairs.empty()) {
-          throw InputError(
-              "white-accel applies to the process noise Q only (it needs the "
-              "model's position/rate pairs)");
-        }
-        if (!initial.white_accel || !(initial.qc > 0)) {
-          throw InputError(
-              "white-accel tuning of Q needs an initial qc > 0 (--init-q-white-accel)");
-        }
-        theta0_.push_back(std::log(initial.qc));
-        AddName("log qc", true);
-        break;
-      case NoiseParam::kScalar: {
-        const double s = m0.trace() / D;
-        if (!(s > 0)) throw InputError("scalar tuning of " + what + " needs trace > 0");
-        theta0_.push_back(std::log(s));
-        AddName("log " + symbol, true);
-        break;
+      if (!initial.white_accel || !(initial.qc > 0)) {
+        throw InputError(
+            "white-accel tuning of Q needs an initial qc > 0 (--init-q-white-accel)");
       }
-      case NoiseParam::kFixed:
-        break;
+      theta0_.push_back(std::log(initial.qc));
+      AddName("log qc", true);
+      return;
     }
+    // All diag or all fixed blocks are that kind over the whole matrix.
+    bool same = !blocks_.empty();
+    for (const CovarianceBlock& b : blocks_)
+      same = same && b.kind == blocks_.front().kind &&
+             (b.kind == NoiseParam::kDiag || b.kind == NoiseParam::kFixed);
+    if (same) kind_ = blocks_.front().kind;
+    if (same || blocks_.empty()) blocks_.assign(1, {kind_, 0, D, ""});
+    int next = 0;
+    for (const CovarianceBlock& b : blocks_) {
+      if (b.first != next || b.count < 1 || b.kind == NoiseParam::kWhiteAccel)
+        throw InputError("the blocks of " + what + " must cover it in order (internal)");
+      next += b.count;
+      AddBlock(b, what, m0);
+    }
+    if (next != D) throw InputError("the blocks of " + what + " must cover it (internal)");
   }
 
   NoiseParam kind() const { return kind_; }
@@ -130,32 +121,49 @@ class CovarianceParam {
   Eigen::Matrix<T, D, D> Matrix(const T* theta, double dt) const {
     using std::exp;
     using MatT = Eigen::Matrix<T, D, D>;
+    if (kind_ == NoiseParam::kWhiteAccel)
+      return exp(theta[0]) * WhiteAccel(1.0, dt).template cast<T>();
+    if (kind_ == NoiseParam::kFixed && blocks_.size() == 1)
+      return (initial_.white_accel ? WhiteAccel(initial_.qc, dt) : initial_.matrix)
+          .template cast<T>();
     MatT out = MatT::Zero();
-    switch (kind_) {
-      case NoiseParam::kDiag:
-        for (int i = 0; i < D; ++i) out(i, i) = exp(theta[i]);
-        return out;
-      case NoiseParam::kFull: {
-        MatT L = MatT::Zero();
-        int k = 0;
-        for (int i = 0; i < D; ++i) {
-          for (int j = 0; j < i; ++j) L(i, j) = theta[k++];
-          L(i, i) = exp(0.5 * theta[k++]);
+    MatT L = MatT::Zero();  // the full blocks' Cholesky factors
+    bool any_full = false;
+    int k = 0;
+    for (const CovarianceBlock& b : blocks_) {
+      const int e = b.first + b.count;
+      switch (b.kind) {
+        case NoiseParam::kDiag:
+          for (int i = b.first; i < e; ++i) out(i, i) = exp(theta[k++]);
+          break;
+        case NoiseParam::kFull:
+          any_full = true;
+          for (int i = b.first; i < e; ++i) {
+            for (int j = b.first; j < i; ++j) L(i, j) = theta[k++];
+            L(i, i) = exp(0.5 * theta[k++]);
+          }
+          break;
+        case NoiseParam::kScalar: {
+          const T v = exp(theta[k++]);
+          for (int i = b.first; i < e; ++i) out(i, i) = v;
+          break;
         }
-        out = L * L.transpose();
-        return out;
+        case NoiseParam::kFixed:
+        default:
+          out.block(b.first, b.first, b.count, b.count) =
+              initial_.matrix.block(b.first, b.first, b.count, b.count).template cast<T>();
+          break;
       }
-      case NoiseParam::kWhiteAccel:
-        return exp(theta[0]) * WhiteAccel(1.0, dt).template cast<T>();
-      case NoiseParam::kScalar:
-        for (int i = 0; i < D; ++i) out(i, i) = exp(theta[0]);
-        return out;
-      case NoiseParam::kFixed:
-      default:
-        return (initial_.white_accel ? WhiteAccel(initial_.qc, dt) : initial_.matrix)
-            .template cast<T>();
     }
+    if (any_full) out += L * L.transpose();  // the blocks are disjoint: blockdiag(L_b L_b^T)
+    return out;
   }
+
+  // The blocks: one per sensor group, or one of kind() over all of D.
+  const std::vector<CovarianceBlock>& Blocks() const { return blocks_; }
+  // True when the blocks differ from one block of kind() (EM and ALS take
+  // one kind over the whole matrix).
+  bool Blockwise() const { return blocks_.size() > 1; }
 
   // qc for white-accel (or fixed with a white-accel initial value), else 0.
   double Qc(const double* theta) const {
@@ -171,6 +179,55 @@ class CovarianceParam {
   }
 
  private:
+  // The initial parameters and names of block b of the initial matrix m0.
+  void AddBlock(const CovarianceBlock& b, const std::string& what, const Mat<D, D>& m0) {
+    const int e = b.first + b.count;
+    switch (b.kind) {
+      case NoiseParam::kDiag:
+        for (int i = b.first; i < e; ++i) {
+          if (!(m0(i, i) > 0)) {
+            throw InputError("diag tuning of " + what + " needs a positive initial diagonal, got " +
+                             what + "(" + names_[i] + ", " + names_[i] +
+                             ") = " + FormatNumber(m0(i, i)));
+          }
+          theta0_.push_back(std::log(m0(i, i)));
+          AddName("log " + symbol_ + "_" + names_[i], true);
+        }
+        break;
+      case NoiseParam::kFull: {
+        const Eigen::MatrixXd block = m0.block(b.first, b.first, b.count, b.count);
+        const Eigen::LLT<Eigen::MatrixXd> llt(block);
+        if (llt.info() != Eigen::Success || !(block.diagonal().minCoeff() > 0)) {
+          throw InputError("full (log-Cholesky) tuning of " + what +
+                           (b.label.empty() ? "" : " (group " + b.label + ")") +
+                           " needs a positive definite initial matrix");
+        }
+        const Eigen::MatrixXd L = llt.matrixL();
+        for (int i = 0; i < b.count; ++i) {
+          const std::string& ni = names_[b.first + i];
+          for (int j = 0; j < i; ++j) {
+            theta0_.push_back(L(i, j));
+            AddName("L" + symbol_ + "(" + ni + "," + names_[b.first + j] + ")", false);
+            off_row_.back() = b.first + i;
+          }
+          theta0_.push_back(std::log(L(i, i) * L(i, i)));
+          AddName("log L" + symbol_ + "(" + ni + "," + ni + ")^2", true);
+        }
+        break;
+      }
+      case NoiseParam::kScalar: {
+        const double sc = m0.block(b.first, b.first, b.count, b.count).trace() / b.count;
+        if (!(sc > 0)) throw InputError("scalar tuning of " + what + " needs trace > 0");
+        theta0_.push_back(std::log(sc));
+        AddName("log " + symbol_ + (b.label.empty() ? "" : "_" + b.label), true);
+        break;
+      }
+      case NoiseParam::kFixed:
+      default:
+        break;
+    }
+  }
+
   void AddName(const std::string& name, bool is_log) {
     param_names_.push_back(name);
     is_log_.push_back(is_log);
@@ -186,6 +243,7 @@ class CovarianceParam {
   std::vector<std::string> param_names_;
   std::vector<bool> is_log_;
   std::vector<int> off_row_;
+  std::vector<CovarianceBlock> blocks_;
 };
 
 }  // namespace estlab

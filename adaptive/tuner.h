@@ -46,6 +46,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "adaptive/estimators.h"
@@ -86,6 +87,10 @@ struct TuneProgress {
 struct TunerOptions {
   NoiseParam q_param = NoiseParam::kDiag;
   NoiseParam r_param = NoiseParam::kDiag;
+  // R per sensor group (ml only): every group of the measurement once, R
+  // block-diagonal (adaptive/noise_param.h, CovarianceBlock). Empty: r_param
+  // over all of R.
+  std::vector<std::pair<std::string, NoiseParam>> r_param_groups;
   // The estimator (adaptive/estimators.h) and, for ml, its solver.
   Estimator estimator = Estimator::kMl;
   MlSolver solver = MlSolver::kLbfgs;
@@ -260,6 +265,7 @@ struct TuneResult {
   // Tuned noise. Q and R row-major (n x n, m x m); for white-accel Q is
   // qc * Q_wa(dt_ref) at the median step dt_ref of the first dataset.
   NoiseParam q_param = NoiseParam::kDiag, r_param = NoiseParam::kDiag;
+  std::vector<std::pair<std::string, NoiseParam>> r_param_groups;  // as in the options
   bool q_white_accel = false;
   double qc = 0.0;
   double dt_ref = 0.0;

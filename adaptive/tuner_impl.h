@@ -72,7 +72,12 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   result.is_log = lik.ParamIsLog();
   result.theta_initial = lik.InitialTheta();
   result.q_param = options.q_param;
-  result.r_param = options.r_param;
+  result.r_param = lik.r_param().kind();
+  if (lik.r_param().Blockwise()) result.r_param_groups = options.r_param_groups;
+  if (lik.r_param().Blockwise() && options.estimator != Estimator::kMl) {
+    throw InputError(std::string("--r-param: a kind per sensor group is for the ml estimator; ") +
+                     EstimatorName(options.estimator) + " takes one kind for all of R");
+  }
   result.dt_ref = lik.dt_ref();
   result.updates = lik.NumTerms();
   const int noise = lik.NumNoiseParams();

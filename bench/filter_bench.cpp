@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -150,9 +151,11 @@ Vec<double, Model::kStateDim> StartState() {
 }
 
 // Runs predict + update on a fixed measurement that the filter tracks, so the
-// state stays bounded over millions of iterations.
+// state stays bounded over millions of iterations. missing >= 0: that
+// component of z is missing (NaN) in every step, the subset update of a
+// slower sensor's gap (src/filters/missing.h).
 template <class Model, class Meas, class MakeFilter>
-void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make) {
+void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make, int missing = -1) {
   constexpr int N = Model::kStateDim, M = Meas::kDim;
   typename Model::Params params;
   TransitionOptions topt;
@@ -165,8 +168,8 @@ void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make)
   const Mat<N, N> P0 = 0.01 * Mat<N, N>::Identity();
   const Mat<N, N> Q = 1e-4 * Mat<N, N>::Identity();
   const Mat<M, M> R = 1e-2 * Mat<M, M>::Identity();
-  const Vec<double, M> z =
-      EvalMeasurement<Model, Meas, double>(0.0, x0, transition->input(), params);
+  Vec<double, M> z = EvalMeasurement<Model, Meas, double>(0.0, x0, transition->input(), params);
+  if (missing >= 0) z(missing) = std::numeric_limits<double>::quiet_NaN();
   filter->Initialize(x0, P0);
   const double dt = 0.01;
   double t = 0.0;
@@ -184,11 +187,15 @@ void FilterStep(benchmark::State& state, Integrator integrator, MakeFilter make)
   state.SetItemsProcessed(state.iterations());
 }
 
+// The *Gap_ forms leave component `missing` of z out of every update.
 template <class Model, class Meas>
-void Ekf_(benchmark::State& s, Integrator integrator) {
-  FilterStep<Model, Meas>(s, integrator, [](Transition<Model>* tr, const auto& p) {
-    return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
-  });
+void EkfGap_(benchmark::State& s, Integrator integrator, int missing) {
+  FilterStep<Model, Meas>(
+      s, integrator,
+      [](Transition<Model>* tr, const auto& p) {
+        return std::make_unique<Ekf<Model, Meas>>(tr, p, EkfOptions{});
+      },
+      missing);
 }
 // The EKF with a constant nonzero input (1 V, and 0.5 N for a second input).
 template <class Model, class Meas>
@@ -210,31 +217,56 @@ void EkfInputLinear_(benchmark::State& s) {
   });
 }
 template <class Model, class Meas>
+void KfGap_(benchmark::State& s, int missing) {
+  FilterStep<Model, Meas>(
+      s, Integrator::kRk4,
+      [](Transition<Model>*, const auto& p) {
+        KfOptions o;
+        o.operating_point.assign(Model::kStateDim, 0.0);
+        return std::make_unique<LinearizedKf<Model, Meas>>(p, o);
+      },
+      missing);
+}
+template <class Model, class Meas>
+void SigmaGap_(benchmark::State& s, Integrator integrator, SigmaRule rule, int missing) {
+  FilterStep<Model, Meas>(
+      s, integrator,
+      [rule](Transition<Model>* tr, const auto& p) {
+        SigmaPointOptions o;
+        o.rule = rule;
+        o.gh_order = 3;
+        return std::make_unique<SigmaPointFilter<Model, Meas>>(tr, p, o);
+      },
+      missing);
+}
+template <class Model, class Meas>
+void PfGap_(benchmark::State& s, int missing) {
+  FilterStep<Model, Meas>(
+      s, Integrator::kRk4,
+      [&s](Transition<Model>* tr, const auto& p) {
+        ParticleOptions o;
+        o.num_particles = int(s.range(0));
+        o.resample = ResampleScheme::kSystematic;
+        o.ess_threshold = 1.0;  // resample every step
+        return std::make_unique<ParticleFilter<Model, Meas>>(tr, p, o);
+      },
+      missing);
+}
+template <class Model, class Meas>
+void Ekf_(benchmark::State& s, Integrator integrator) {
+  EkfGap_<Model, Meas>(s, integrator, -1);
+}
+template <class Model, class Meas>
 void Kf_(benchmark::State& s) {
-  FilterStep<Model, Meas>(s, Integrator::kRk4, [](Transition<Model>*, const auto& p) {
-    KfOptions o;
-    o.operating_point.assign(Model::kStateDim, 0.0);
-    return std::make_unique<LinearizedKf<Model, Meas>>(p, o);
-  });
+  KfGap_<Model, Meas>(s, -1);
 }
 template <class Model, class Meas>
 void Sigma_(benchmark::State& s, Integrator integrator, SigmaRule rule) {
-  FilterStep<Model, Meas>(s, integrator, [rule](Transition<Model>* tr, const auto& p) {
-    SigmaPointOptions o;
-    o.rule = rule;
-    o.gh_order = 3;
-    return std::make_unique<SigmaPointFilter<Model, Meas>>(tr, p, o);
-  });
+  SigmaGap_<Model, Meas>(s, integrator, rule, -1);
 }
 template <class Model, class Meas>
 void Pf_(benchmark::State& s) {
-  FilterStep<Model, Meas>(s, Integrator::kRk4, [&s](Transition<Model>* tr, const auto& p) {
-    ParticleOptions o;
-    o.num_particles = int(s.range(0));
-    o.resample = ResampleScheme::kSystematic;
-    o.ess_threshold = 1.0;  // resample every step
-    return std::make_unique<ParticleFilter<Model, Meas>>(tr, p, o);
-  });
+  PfGap_<Model, Meas>(s, -1);
 }
 
 // Bare transitions: `count` RK4 steps (the UKF's 2n+1 points), or one RK4
@@ -363,7 +395,10 @@ void Study_(benchmark::State& state, const std::string& file, int jobs) {
 // the code in its entry translation unit, the generated one of the built-in
 // or the entry.cpp of estlab_add_model), over `steps` steps of data
 // simulated once with RK4; items = steps.
-void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKindOptions kind) {
+// `measurement` has two outputs; `every` their sensor periods in rows (empty:
+// every row; src/sim/simulation.h).
+void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKindOptions kind,
+                const std::string& measurement, std::vector<int> every) {
   const ModelEntry& model = FindModel(model_name);
   SimulationSpec sim;
   sim.params = model.ResolveParams({});
@@ -372,8 +407,9 @@ void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKi
   sim.t_end = 9.99;  // 1000 rows
   sim.transition.integrator = Integrator::kRk4;
   sim.process_noise_var = {1e-6, 1e-4, 1e-6, 1e-4};
-  sim.measurement = "angles";
+  sim.measurement = measurement;
   sim.meas_noise_var = {1e-2, 1e-2};
+  sim.output_every = every;
   const SimulationResult s = model.simulate(sim);
   FilterData d;
   d.m = 2;
@@ -384,7 +420,7 @@ void RunFilter_(benchmark::State& state, const std::string& model_name, FilterKi
   }
   FilterSpec spec;
   spec.params = sim.params;
-  spec.measurement = "angles";
+  spec.measurement = measurement;
   spec.filter = kind;
   spec.transition.integrator = Integrator::kRk4;
   spec.x0 = sim.x0;
@@ -447,6 +483,16 @@ void RegisterAll() {
   RegisterBenchmark("PF/double-pendulum/n4m2/rk4/systematic-every-step", Pf_<DP, DP::Angles>)
       ->Arg(1000)
       ->Unit(us);
+  // One of the two angles missing in every step (a slower sensor's gap):
+  // the subset update on the full-size matrices (src/filters/missing.h).
+  RegisterBenchmark("KF/double-pendulum/n4m2/rk4/theta2-missing", KfGap_<DP, DP::Angles>, 1);
+  RegisterBenchmark("EKF/double-pendulum/n4m2/rk4/theta2-missing", EkfGap_<DP, DP::Angles>, rk4, 1);
+  RegisterBenchmark("UKF/double-pendulum/n4m2/rk4/theta2-missing", SigmaGap_<DP, DP::Angles>, rk4,
+                    SigmaRule::kUnscented, 1);
+  RegisterBenchmark("PF/double-pendulum/n4m2/rk4/systematic-every-step/theta2-missing",
+                    PfGap_<DP, DP::Angles>, 1)
+      ->Arg(1000)
+      ->Unit(us);
   RegisterBenchmark("Floor/double-pendulum/rk4-with-jacobian/x1", Transitions_<DP>, 1, true, rk4);
   RegisterBenchmark("Floor/double-pendulum/rk4/x9", Transitions_<DP>, 9, false, rk4);
   // The same model from examples/models/double_pendulum.model (estlab_add_model).
@@ -457,10 +503,27 @@ void RegisterAll() {
   // Whole runs through the registry entries (1000 steps), built-in and file.
   for (const char* name : {"double-pendulum", "double-pendulum-file"}) {
     RegisterBenchmark((std::string("RunFilter/") + name + "/ekf-rk4/1000-steps").c_str(),
-                      RunFilter_, std::string(name), FilterKindOptions{EkfOptions{}})
+                      RunFilter_, std::string(name), FilterKindOptions{EkfOptions{}},
+                      std::string("angles"), std::vector<int>{})
         ->Unit(us);
     RegisterBenchmark((std::string("RunFilter/") + name + "/ukf-rk4/1000-steps").c_str(),
-                      RunFilter_, std::string(name), FilterKindOptions{SigmaPointOptions{}})
+                      RunFilter_, std::string(name), FilterKindOptions{SigmaPointOptions{}},
+                      std::string("angles"), std::vector<int>{})
+        ->Unit(us);
+  }
+  // A measurement of two sensor groups (cart-pole x-theta: position and
+  // encoder, each group's NIS tallied): both every row, and the position in
+  // every tenth row only.
+  for (const bool gaps : {false, true}) {
+    const std::vector<int> every = gaps ? std::vector<int>{10, 1} : std::vector<int>{};
+    const std::string tail = gaps ? "/position-every-10th" : "/all-observed";
+    RegisterBenchmark(("RunFilter/cart-pole/ekf-rk4/1000-steps" + tail).c_str(), RunFilter_,
+                      std::string("cart-pole"), FilterKindOptions{EkfOptions{}},
+                      std::string("x-theta"), every)
+        ->Unit(us);
+    RegisterBenchmark(("RunFilter/cart-pole/ukf-rk4/1000-steps" + tail).c_str(), RunFilter_,
+                      std::string("cart-pole"), FilterKindOptions{SigmaPointOptions{}},
+                      std::string("x-theta"), every)
         ->Unit(us);
   }
   // Cheap 4x2 model.

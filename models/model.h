@@ -35,15 +35,23 @@
 //                                    input (u as in Rhs; EvalMeasurement), or
 //   Eval<T>(t, x, u, params)         h(t, x, u): one that sees the time too
 //                                    (t: const T&, as in Rhs)
+//   kGroups (optional)               its sensor groups: std::array of
+//                                    OutputGroupSpec {name, first, count},
+//                                    consecutive ranges that cover the
+//                                    outputs in order; each group has its own
+//                                    R block, tuned R, NIS and, in simulated
+//                                    studies, its own rate (docs/multirate.md)
 #ifndef ESTLAB_MODELS_MODEL_H_
 #define ESTLAB_MODELS_MODEL_H_
 
+#include <array>
 #include <concepts>
 #include <cstddef>
 #include <tuple>
 #include <type_traits>
 #include <utility>
 
+#include "src/core/params.h"
 #include "src/core/types.h"
 
 namespace estlab {
@@ -183,6 +191,27 @@ concept MeasurementSeesInput = requires(const Vec<double, M::kStateDim>& x, cons
   { Meas::template Eval<double>(x, u, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
 };
 
+// Meas::kGroups, or none (the measurement is one sensor).
+template <class Meas>
+constexpr auto MeasurementGroups() {
+  if constexpr (requires { Meas::kGroups; })
+    return Meas::kGroups;
+  else
+    return std::array<OutputGroupSpec, 0>{};
+}
+
+// The groups, if any, are non-empty consecutive ranges that cover the
+// outputs in order.
+template <class Meas>
+constexpr bool GroupsCoverOutputs() {
+  int next = 0;
+  for (const OutputGroupSpec& g : MeasurementGroups<Meas>()) {
+    if (g.first != next || g.count < 1) return false;
+    next += g.count;
+  }
+  return next == 0 || next == Meas::kDim;
+}
+
 template <class Meas, class M>
 concept MeasurementOf = DynamicModel<M> &&
     requires(const Vec<double, M::kStateDim>& x, const typename M::Params& p) {
@@ -190,6 +219,7 @@ concept MeasurementOf = DynamicModel<M> &&
   { Meas::kDim } -> std::convertible_to<int>;
   requires Meas::kOutputs.size() == std::size_t(Meas::kDim);
   requires Meas::kAngleOutputs.size() == std::size_t(Meas::kDim);
+  requires GroupsCoverOutputs<Meas>();
   requires MeasurementSeesTime<Meas, M> || MeasurementSeesInput<Meas, M> || requires {
     { Meas::template Eval<double>(x, p) } -> std::convertible_to<Vec<double, Meas::kDim>>;
   };

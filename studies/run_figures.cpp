@@ -4,6 +4,9 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "src/core/types.h"
 #include "src/io/output_file.h"
@@ -171,20 +174,28 @@ void InnovationsFigure(const RunContext& c) {
   c.scripts->push_back(fig.Write(c.term, 900, 260 * int(m) + 60));
 }
 
-// NIS_k (log scale) with the chi-square(m) 95 % bounds of one step and of
-// the mean NIS over the K updates.
+// NIS_k (log scale) with the chi-square 95 % bounds of one step, for each
+// number of observed components a row has (its finite nu_<output> cells: a
+// sensor group missing in a row leaves it fewer), and of the mean NIS over
+// the K updates with all their observed components (ChiSquareMeanBounds95).
 void NisFigure(const RunContext& c) {
   const Table& tb = c.table;
   const int nis_c = tb.Col("nis");
-  long updates = 0;
+  std::vector<int> nu_c;
+  for (const auto& o : c.outputs) nu_c.push_back(tb.Col("nu_" + o));
+  long updates = 0, dof = 0;
   double sum = 0.0;
-  for (size_t k = 0; k < tb.rows(); ++k)
-    if (std::isfinite(tb.At(k, nis_c))) ++updates, sum += tb.At(k, nis_c);
+  std::set<int> dofs;  // the observed counts that occur
+  for (size_t k = 0; k < tb.rows(); ++k) {
+    if (!std::isfinite(tb.At(k, nis_c))) continue;
+    int observed = 0;
+    for (const int col : nu_c) observed += col < 0 || std::isfinite(tb.At(k, col));
+    ++updates, sum += tb.At(k, nis_c), dof += observed;
+    dofs.insert(observed);
+  }
   if (updates == 0) return;
-  const int m = int(c.outputs.size());
-  double step[2], mean[2];
-  ChiSquareBounds95(1, m, step);
-  ChiSquareBounds95(updates, m, mean);
+  double mean[2];
+  ChiSquareMeanBounds95(updates, dof, mean);
   GnuplotFigure fig(c.folder, "nis");
   fig.dat() << "# t nis\n";
   for (size_t k = 0; k < tb.rows(); ++k)
@@ -198,11 +209,15 @@ void NisFigure(const RunContext& c) {
     << "\n"
     << GnuplotLogAxis("y") << kKeyBelow << "  set ylabel 'NIS'\n  set xlabel 't [s]'\n"
     << "  plot " << GnuplotQuote(fig.dat_name())
-    << " using 1:2 with points pt 7 ps 0.35 lc rgb '#1f77b4' title 'NIS', \\\n       "
-    << FormatDouble(step[0]) << " with lines dt 2 lc rgb 'gray30' title "
-    << GnuplotText("95 % of one step (chi2, " + std::to_string(m) + " dof)") << ", \\\n       "
-    << FormatDouble(step[1]) << " with lines dt 2 lc rgb 'gray30' notitle, \\\n       "
-    << FormatDouble(sum / double(updates))
+    << " using 1:2 with points pt 7 ps 0.35 lc rgb '#1f77b4' title 'NIS', \\\n       ";
+  for (const int d : dofs) {
+    double step[2];
+    ChiSquareBounds95(1, d, step);
+    b << FormatDouble(step[0]) << " with lines dt 2 lc rgb 'gray30' title "
+      << GnuplotText("95 % of one step (chi2, " + std::to_string(d) + " dof)") << ", \\\n       "
+      << FormatDouble(step[1]) << " with lines dt 2 lc rgb 'gray30' notitle, \\\n       ";
+  }
+  b << FormatDouble(sum / double(updates))
     << " with lines lw 2 lc rgb '#d62728' title 'mean NIS', \\\n       " << FormatDouble(mean[0])
     << " with lines dt 3 lc rgb '#d62728' title '95 % of the mean', \\\n       "
     << FormatDouble(mean[1]) << " with lines dt 3 lc rgb '#d62728' notitle\n";

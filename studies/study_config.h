@@ -34,7 +34,11 @@
 //   truth-substeps = 1               #   fixed-step substeps per dt
 //   process-noise = white-accel 1    # none (default) | diag v1,v2,.. | white-accel qc
 //                                    #   | matrix a,b;c,d  (per-step covariance)
-//   measurement = sin                # measurement name of the model (required)
+//   measurement = sin                # measurement name of the model (required), or
+//                                    #   its sensor groups: position,encoder
+//   sensor-rate = position=1         # sensor groups' rates in Hz (a whole number of
+//   sensor-every = position=100      #   rows of dt), or every k-th row; the others
+//                                    #   every row; missing between (docs/multirate.md)
 //   meas-noise-var = 0.09            # one variance per output (default 0)
 //   meas-noise = gaussian            # gaussian (default) | poisson: Poisson counts
 //                                    #   with lambda = meas-noise-var (paper 004)
@@ -57,8 +61,8 @@
 //                                    #   columns are truth (RMSE, NEES)
 //   burn-in = 50                     # rows of each run left out of the NIS and
 //                                    #   the metrics that need no truth (default 0)
-//   # With data, x0, truth-*, dt, steps, process-noise, meas-noise*, measure-at-t0
-//   # are errors, and no noise section may use the oracle.
+//   # With data, x0, truth-*, dt, steps, process-noise, meas-noise*, measure-at-t0,
+//   # sensor-* are errors, and no noise section may use the oracle.
 //
 //   Any scenario value may list alternatives separated by '|', each with an
 //   optional label:  x0 = pi4: theta=0.785398 | pi2: theta=1.570796

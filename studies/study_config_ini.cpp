@@ -105,7 +105,9 @@ const std::vector<std::string> kSimulationKeys = {"x0",
                                                   "process-noise",
                                                   "meas-noise-var",
                                                   "meas-noise",
-                                                  "measure-at-t0"};
+                                                  "measure-at-t0",
+                                                  "sensor-rate",
+                                                  "sensor-every"};
 const std::vector<std::string> kRecordedKeys = {"tune-data", "column", "truth", "burn-in"};
 const std::vector<std::string> kScenarioKeys = [] {
   std::vector<std::string> keys = {"model",         "params",   "measurement", "prior-x0",

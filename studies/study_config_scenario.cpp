@@ -10,6 +10,7 @@
 #include "src/core/parse.h"
 #include "src/core/white_accel.h"
 #include "src/options/filter_flags.h"
+#include "src/options/sensor_rates.h"
 #include "src/registry/model_plugin.h"
 #include "src/sim/input_signal.h"
 #include "src/sim/simulator_impl.h"
@@ -232,9 +233,9 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   }
 
   if (!v.Has("measurement")) v.FailSection("'measurement' is required (see 'estlab list')");
-  truth.measurement = get("measurement")->text;
   const MeasurementDesc& meas = *Checked(
       *get("measurement"), err, [&](const std::string& t) { return &model.FindMeasurement(t); });
+  truth.measurement = meas.name;  // "imu,gps": the measurement with those groups
   const int m = int(meas.outputs.size());
   truth.meas_noise_var.assign(m, 0.0);
   if (v.Has("meas-noise-var")) {
@@ -244,6 +245,15 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       RequireNonNegative(list, "meas-noise-var");
       return list;
     });
+  }
+  for (const char* key : {"sensor-rate", "sensor-every"}) {  // one call reads both
+    if (!v.Has(key)) continue;
+    truth.output_every = Checked(*get(key), err, [&](const std::string&) {
+      auto text = [&](const char* k) { return v.Has(k) ? get(k)->text : std::string(); };
+      return OutputEvery(meas, text("sensor-rate"), text("sensor-every"), truth.dt, "sensor-rate",
+                         "sensor-every");
+    });
+    break;
   }
   sc.oracle_r.assign(m * m, 0.0);
   for (int j = 0; j < m; ++j) sc.oracle_r[j * m + j] = truth.meas_noise_var[j];

@@ -35,6 +35,19 @@ std::string TuningFolder(const std::string& dir) { return dir + "/tuning"; }
 
 namespace {
 
+// The r_param column: one kind, or a kind per sensor group ("imu=full gps=scalar").
+std::string RParamText(const TunerOptions& o) {
+  if (o.r_param_groups.empty()) return NoiseParamName(o.r_param);
+  std::string out;
+  for (const auto& [group, kind] : o.r_param_groups) {
+    if (!out.empty()) out += ' ';
+    out += group;
+    out += '=';
+    out += NoiseParamName(kind);
+  }
+  return out;
+}
+
 constexpr uint64_t kTuneSeedTag = 0x74756E65ull;  // "tune"
 
 std::string JoinValues(const std::vector<double>& v) {
@@ -276,7 +289,7 @@ TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, TuningProgres
       {key.scenario, key.filter, key.noise, failure.empty() ? TuneStatusName(r.status) : "failed",
        std::to_string(cb.tune_datasets), std::to_string(r.updates), Sig10(r.nll_initial),
        Sig10(r.nll_tuned), std::to_string(r.iterations), NoiseParamName(cb.tuner.q_param),
-       NoiseParamName(cb.tuner.r_param), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
+       RParamText(cb.tuner), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
        JoinValues(r.r), failure, TunedParamsText(r)});
   return t;
 }

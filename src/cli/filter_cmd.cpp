@@ -46,6 +46,11 @@ constexpr const char* kExamples = R"(Examples:
   estlab filter --model pendulum --measure angle --filter ukf --adapt sage-husa \
       --adapt-what r --data lab.csv --column z_theta=angle_rad --q-diag 1e-6,1e-4 \
       --r-diag 0.01 --out est.csv
+  # Two sensor groups at their own rates (estlab simulate --sensor-rate position=1),
+  # an R per group; the summary gives each group's NIS:
+  estlab filter --model cart-pole --measure position,encoder --filter ekf --data mr.csv \
+      --input 0 --x0 theta=3 --q-diag 1e-8,1e-6,1e-8,1e-6 --r-diag position=1e-4 \
+      --r-diag encoder=1e-4 --out est.csv
   # Only the summary (no per-step file):
   estlab filter --model pendulum --param g=9.8 --measure sin --filter ekf --data d.csv \
       --integrator euler --x0 theta=0.785398 --p0-diag 0.1,0.1 --q-white-accel 1 --r-diag 0.09
@@ -57,7 +62,9 @@ theta=0.0174533*angle_deg; a and b numbers or pi). Truth: columns named like the
 are the truth only when the file says so (d.csv.json, written by 'estlab simulate') or
 --truth theta,omega names them (--no-truth: never); then the errors, RMSE/MAE and NEES
 are computed, and the summary says which columns were used. An empty or NaN measurement cell
-is missing: the row updates with its other components (docs/multirate.md). Models with an input read the input's column (named
+is missing: the row updates with its other components (docs/multirate.md). A measurement
+of sensor groups (see 'estlab list') takes --measure GROUP,GROUP and R per group
+(--r-diag GROUP=values, --r GROUP=matrix, one each; 0 between groups). Models with an input read the input's column (named
 as the model's input, or 'u'; --column maps another), held constant from each row to
 the next (zero-order hold); without the column, --input must give a constant. The
 prior holds at --t0 (default: the first row's time; a --t0 later than
@@ -141,6 +148,16 @@ void PrintNisWarning(const FilterSummary& s) {
                "--column, e.g. theta=angle-pi)\n";
 }
 
+// Per sensor group: its updates and mean NIS with bounds (nothing for a
+// measurement without groups).
+void PrintGroupNis(const FilterSummary& s) {
+  for (const FilterSummary::GroupNis& g : s.group_nis) {
+    std::cout << "  " << std::left << std::setw(14) << g.group << std::right << g.mean_nis
+              << "   (95% bounds " << g.nis_bounds95[0] << " .. " << g.nis_bounds95[1] << ", "
+              << g.updates << " updates)\n";
+  }
+}
+
 // adapt_clips counts adapted matrices, not steps: at each update the adapter
 // (src/filters/noise_adapter.h) replaces Q and/or R and counts one clip for
 // each of them that had an eigenvalue raised to the floor, so with
@@ -201,6 +218,7 @@ void PrintSummary(const FilterSummary& s, const AdaptSpec& adapt, const std::str
   std::cout << "log-likelihood  " << s.loglik << (f ? "   (the forward filter's)" : "") << "\n";
   std::cout << "mean NIS        " << s.mean_nis << "   (95% bounds " << s.nis_bounds95[0] << " .. "
             << s.nis_bounds95[1] << ")\n";
+  PrintGroupNis(s.group_nis.empty() && f != nullptr ? *f : s);
   PrintNisWarning(s);
   if (!s.rmse.empty()) {
     std::cout << "mean NEES       " << s.mean_nees << "   (95% bounds " << s.nees_bounds95[0]
@@ -238,6 +256,15 @@ void WriteSummaryJson(const FilterSummary& s, JsonWriter& j,
   j.Key("loglik").Value(s.loglik).Key("updates").Value(s.updates);
   j.Key("mean_nis").Value(s.mean_nis);
   j.Key("nis_bounds95").Value(std::vector<double>{s.nis_bounds95[0], s.nis_bounds95[1]});
+  if (!s.group_nis.empty()) {
+    j.Key("group_nis").BeginObject();
+    for (const FilterSummary::GroupNis& g : s.group_nis) {
+      j.Key(g.group).BeginObject().Key("updates").Value(g.updates).Key("mean_nis").Value(g.mean_nis);
+      j.Key("nis_bounds95").Value(std::vector<double>{g.nis_bounds95[0], g.nis_bounds95[1]});
+      j.EndObject();
+    }
+    j.EndObject();
+  }
   j.Key("mean_nees").Value(s.mean_nees);
   j.Key("nees_bounds95").Value(std::vector<double>{s.nees_bounds95[0], s.nees_bounds95[1]});
   j.Key("steps")

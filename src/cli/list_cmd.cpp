@@ -40,7 +40,16 @@ void ModelJson(const ModelEntry& model, JsonWriter* json) {
   }
   j.EndArray().Key("measurements").BeginArray();
   for (const auto& meas : m->measurements) {
-    j.BeginObject().Key("name").Value(meas.name).Key("outputs").Value(meas.outputs).EndObject();
+    j.BeginObject().Key("name").Value(meas.name).Key("outputs").Value(meas.outputs);
+    if (!meas.groups.empty()) {  // sensor groups: name -> its outputs
+      j.Key("groups").BeginObject();
+      for (const OutputGroup& g : meas.groups) {
+        j.Key(g.name).Value(std::vector<std::string>(meas.outputs.begin() + g.first,
+                                                     meas.outputs.begin() + g.first + g.count));
+      }
+      j.EndObject();
+    }
+    j.EndObject();
   }
   j.EndArray();
   j.Key("has_input").Value(m->has_input()).Key("inputs").Value(m->inputs);
@@ -66,6 +75,13 @@ void PrintModel(const ModelEntry& model, std::ostream& out) {
     out << (i ? "; " : "") << m->measurements[i].name << " -> ";
     for (size_t k = 0; k < m->measurements[i].outputs.size(); ++k)
       out << (k ? "," : "") << m->measurements[i].outputs[k];
+    for (size_t g = 0; g < m->measurements[i].groups.size(); ++g) {  // (position: x, ...)
+      const OutputGroup& group = m->measurements[i].groups[g];
+      out << (g ? ", " : " (sensor groups ") << group.name << ":";
+      for (int k = 0; k < group.count; ++k)
+        out << (k ? "," : " ") << m->measurements[i].outputs[size_t(group.first + k)];
+      if (g + 1 == m->measurements[i].groups.size()) out << ")";
+    }
   }
   if (m->inputs.size() == 1)
     out << "\n    input:        " << m->inputs[0] << " (data column '" << m->inputs[0]

@@ -13,6 +13,7 @@
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/options/filter_flags.h"
+#include "src/options/sensor_rates.h"
 #include "src/registry/registry.h"
 #include "src/sim/input_signal.h"
 #include "src/sim/simulator_impl.h"
@@ -33,6 +34,10 @@ constexpr const char* kExamples = R"(Examples:
       --seed 7 --out d.csv --json
   # Stiff Van der Pol with CVODES BDF:
   estlab simulate --model van-der-pol --x0 x=2 --t-end 3000 --dt 1 --out vdp.csv
+  # Two sensor groups at their own rates: the cart's position at 1 Hz, the
+  # pole's encoder every row (100 Hz); the position cells between are empty:
+  estlab simulate --model cart-pole --x0 theta=3 --t-end 60 --dt 0.01 \
+      --measure position,encoder --meas-noise-var 1e-4,1e-4 --sensor-rate position=1 --out mr.csv
   # Replay a recorded input: the times and the input column of pump.csv
   # (column 'volts' as the model's input u), noisy and noise-free outputs:
   estlab simulate --model two-tanks.model --data pump.csv --column u=volts \
@@ -238,6 +243,10 @@ int RunSimulate(const std::vector<std::string>& args) {
                                         "per-state variances of the noise added after each step")(
       "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
       "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
+      "sensor-rate", po::value<std::string>(),
+      "sensor groups' rates GROUP=HZ,... (others every row; the rest empty cells)")(
+      "sensor-every", po::value<std::string>(),
+      "sensor groups measured every K-th row: GROUP=K,...")(
       "seed", po::value<unsigned long>()->default_value(1), "random seed")(
       "config", po::value<std::string>(),
       "read 'param = NAME=VALUE' and 'x0 = NAME=VALUE,...' lines from a file (the tuned.ini of "
@@ -318,8 +327,8 @@ int RunSimulate(const std::vector<std::string>& args) {
     RequireNonNegative(spec.process_noise_var, "--process-noise-var");
   }
   if (vm.count("measure")) {
-    spec.measurement = vm["measure"].as<std::string>();
-    const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
+    const MeasurementDesc& meas = model.FindMeasurement(vm["measure"].as<std::string>());
+    spec.measurement = meas.name;  // "imu,gps": the measurement with those groups
     if (vm.count("meas-noise-var")) {
       spec.noise_free_outputs = vm.count("data") > 0;
       spec.meas_noise_var = ParseList(vm["meas-noise-var"].as<std::string>(), "--meas-noise-var");
@@ -327,8 +336,14 @@ int RunSimulate(const std::vector<std::string>& args) {
                     "one per output of '" + meas.name + "'");
       RequireNonNegative(spec.meas_noise_var, "--meas-noise-var");
     }
-  } else if (vm.count("meas-noise-var")) {
-    throw InputError("--meas-noise-var needs --measure");
+    auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
+    spec.output_every = OutputEvery(meas, text("sensor-rate"), text("sensor-every"),
+                                    vm.count("data") ? 0.0  // the record's times
+                                                     : ParseNumber(vm["dt"].as<std::string>(),
+                                                                   "--dt"),
+                                    "--sensor-rate", "--sensor-every");
+  } else if (vm.count("meas-noise-var") || vm.count("sensor-rate") || vm.count("sensor-every")) {
+    throw InputError("--meas-noise-var, --sensor-rate and --sensor-every need --measure");
   }
   spec.seed = vm["seed"].as<unsigned long>();
   const std::string out_path = vm["out"].as<std::string>();

@@ -302,8 +302,15 @@ void WriteMatrix(JsonWriter* j, const std::vector<double>& a, int n) {
 
 // {"qc": ..} | {"diag": [..]} | {"scalar": ..} | {"matrix": [[..]]}, plus "param".
 void WriteTuned(JsonWriter* j, NoiseParam param, bool white_accel, double qc,
-                const std::vector<double>& a, int n) {
-  j->BeginObject().Key("param").Value(NoiseParamName(param));
+                const std::vector<double>& a, int n,
+                const std::vector<std::pair<std::string, NoiseParam>>& groups = {}) {
+  j->BeginObject().Key("param").Value(groups.empty() ? NoiseParamName(param) : "per-group");
+  if (!groups.empty()) {
+    j->Key("groups").BeginObject();
+    for (const auto& [name, kind] : groups) j->Key(name).Value(NoiseParamName(kind));
+    j->EndObject();
+    param = NoiseParam::kFixed;  // diag when diagonal, else the matrix
+  }
   if (white_accel) {
     j->Key("qc").Value(qc);
   } else if (param == NoiseParam::kScalar) {
@@ -444,7 +451,7 @@ std::string ResultJson(const ModelEntry& model, const FilterSpec& spec, const Tu
     j.Key("tuned").BeginObject().Key("q");
     WriteTuned(&j, r.q_param, r.q_white_accel, r.qc, r.q, n);
     j.Key("r");
-    WriteTuned(&j, r.r_param, false, 0.0, r.r, m);
+    WriteTuned(&j, r.r_param, false, 0.0, r.r, m, r.r_param_groups);
     j.Key("params").Object(r.param_names, r.param_values);
     const X0Report x0 = TunedX0(model, r, datasets);
     WriteTunedX0Json(&j, x0);
@@ -827,7 +834,9 @@ int RunTune(const std::vector<std::string>& args) {
                     << result.message << "\n";
     out->stream() << ProcessModelLines(model, spec);
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
-    out->stream() << IniLine("r", result.r_param, false, 0.0, result.r, m);
+    out->stream() << IniLine(
+        "r", result.r_param_groups.empty() ? result.r_param : NoiseParam::kFixed, false, 0.0,
+        result.r, m);
     for (size_t i = 0; i < result.param_names.size(); ++i)
       out->stream() << "param = " << result.param_names[i] << "="
                     << FormatDouble(result.param_values[i]) << "\n";

@@ -11,6 +11,14 @@
 
 namespace estlab {
 
+// One sensor group of a measurement (a model's optional kGroups,
+// models/model.h): outputs [first, first + count).
+struct OutputGroupSpec {
+  const char* name;
+  int first;
+  int count;
+};
+
 enum class Constraint { kPositive, kNonNegative, kAny };
 
 template <class Params>

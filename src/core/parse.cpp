@@ -9,6 +9,15 @@
 
 namespace estlab {
 
+std::vector<std::string> SplitTrimmed(const std::string& text, char sep) {
+  std::vector<std::string> parts;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, sep)) parts.push_back(Trim(part));
+  if (!text.empty() && text.back() == sep) parts.push_back("");
+  return parts;
+}
+
 namespace {
 std::vector<std::string> Split(const std::string& s, char sep) {
   std::vector<std::string> parts;

@@ -11,6 +11,9 @@ namespace estlab {
 
 // s without leading and trailing blanks, tabs and carriage returns.
 std::string Trim(const std::string& s);
+// "a, b,,c" -> {"a", "b", "", "c"}: the parts between the separators,
+// trimmed; a separator at the end gives a last empty part.
+std::vector<std::string> SplitTrimmed(const std::string& text, char sep);
 
 // "1.5" -> 1.5; throws InputError("<option>: ...") on junk, NaN or inf.
 double ParseNumber(const std::string& text, const std::string& option);

@@ -45,6 +45,7 @@ bool UsableTypeName(const std::string& name) {
                                                    "Params",
                                                    "ParamsT",
                                                    "ParamSpec",
+                                                   "OutputGroupSpec",
                                                    "Constraint",
                                                    "Measurements",
                                                    "Rhs",
@@ -149,6 +150,19 @@ std::vector<std::string> MeasurementTypeNames(const ModelFile& m) {
   return names;
 }
 
+// kGroups of a measurement with sensor groups, else "".
+std::string GroupsMember(const MeasurementDecl& meas) {
+  if (meas.groups.empty()) return "";
+  std::vector<std::string> groups;
+  for (const GroupDecl& g : meas.groups) {
+    std::string item = "{";  // appended: see ArrayMember
+    item += CppStringLiteral(g.name);
+    item += ", " + std::to_string(g.first) + ", " + std::to_string(g.count) + "}";
+    groups.push_back(item);
+  }
+  return ArrayMember(4, "OutputGroupSpec", "kGroups", groups, true);
+}
+
 std::string MeasurementStruct(const ModelFile& m, const MeasurementDecl& meas,
                               const std::string& type) {
   std::vector<std::string> outputs, angles;
@@ -160,7 +174,8 @@ std::string MeasurementStruct(const ModelFile& m, const MeasurementDecl& meas,
          " {\n    static constexpr const char* kName = " + CppStringLiteral(meas.name) +
          ";\n    static constexpr int kDim = " + std::to_string(meas.outputs.size()) + ";\n" +
          ArrayMember(4, "const char*", "kOutputs", outputs) +
-         ArrayMember(4, "bool", "kAngleOutputs", angles) + EvalFunction(m, meas, 4) + "  };\n";
+         ArrayMember(4, "bool", "kAngleOutputs", angles) + GroupsMember(meas) +
+         EvalFunction(m, meas, 4) + "  };\n";
 }
 
 // The file's name without its folder: the header (and so the model cache's

@@ -46,16 +46,30 @@ bool ReadHeader(const Line& line, size_t open, IniSection* section,
     diagnostics->push_back(MakeDiagnostic(line.At(open), "empty section header"));
     return false;
   }
-  if (words.size() > 2) {
-    diagnostics->push_back(
-        MakeDiagnostic(line.At(words[2].second), "too many words in section header"));
-  }
   section->kind = std::string(words[0].first);
   section->kind_pos = line.At(words[0].second);
-  if (words.size() > 1) {
-    section->name = std::string(words[1].first);
-    section->name_pos = line.At(words[1].second);
+  if (words.size() < 2) return true;
+  // "name", or "name: group" with or without blanks around the ':'.
+  const size_t rest = words[1].second;
+  const size_t colon = text.substr(0, close).find(':', rest);
+  const size_t name_end = colon == std::string_view::npos ? close : colon;
+  size_t end = rest;
+  while (end < name_end && !IsBlank(text[end])) ++end;
+  section->name = std::string(text.substr(rest, end - rest));
+  section->name_pos = line.At(rest);
+  size_t extra = SkipBlanks(text, end);
+  if (colon != std::string_view::npos && extra == colon) {
+    const size_t g = SkipBlanks(text, colon + 1);
+    size_t g_end = g;
+    while (g_end < close && !IsBlank(text[g_end])) ++g_end;
+    section->group = std::string(text.substr(g, g_end - g));
+    section->group_pos = line.At(g);
+    if (section->group.empty())
+      diagnostics->push_back(MakeDiagnostic(line.At(colon), "missing group name after ':'"));
+    extra = SkipBlanks(text, g_end);
   }
+  if (extra < close)
+    diagnostics->push_back(MakeDiagnostic(line.At(extra), "too many words in section header"));
   return true;
 }
 

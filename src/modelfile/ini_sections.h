@@ -31,13 +31,16 @@ struct IniSection {
   SourcePos kind_pos;
   std::string name;  // second word, "" when absent ("angle-rate")
   SourcePos name_pos;
+  std::string group;  // "[kind name: group]": the word after ':', else ""
+  SourcePos group_pos;
   std::vector<IniEntry> entries;
   int malformed_lines = 0;  // lines of the section that are not "key = value"
 };
 
 // Problems reported here: text before the first section, a header without
 // ']' (read as if closed), text after ']', an empty header, more than two
-// words in a header, a line without '=', an empty key.
+// words in a header (a ':' and a group name after the name excepted), a line
+// without '=', an empty key.
 std::vector<IniSection> SplitIniSections(std::string_view text,
                                          std::vector<Diagnostic>* diagnostics);
 

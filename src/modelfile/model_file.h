@@ -27,6 +27,12 @@
 //   [measurement angle]               # one or more; output = expression [: angle]
 //   theta = theta : angle
 //
+//   [measurement nav: imu]            # or sensor groups: one section per
+//   a = omega^2                       # sensor, joined into the measurement
+//   [measurement nav: camera]         # 'nav' (its own R block, tuned R, NIS
+//   theta = theta : angle             # and study rate each); --measure nav
+//                                     # or --measure imu,camera
+//
 //   [invariant energy]                # optional; each line is one invariant
 //   energy = 0.5 * omega^2 + w2 * cos(theta)
 //   conserved-if-zero = c, u          # optional: when these are 0 (default: always)
@@ -94,10 +100,20 @@ struct OutputDecl {
   SourcePos pos;
 };
 
+// A sensor group: outputs [first, first + count) of its measurement, from
+// one [measurement NAME: GROUP] section.
+struct GroupDecl {
+  std::string name;
+  int first = 0;
+  int count = 0;
+  SourcePos pos;
+};
+
 struct MeasurementDecl {
   std::string name;
   std::vector<OutputDecl> outputs;
   SourcePos pos;
+  std::vector<GroupDecl> groups;  // empty: one sensor
 };
 
 struct InvariantDecl {

@@ -39,6 +39,10 @@ class SectionReader {
 
   RawModel Read(const std::vector<IniSection>& sections) {
     for (const IniSection& s : sections) ReadSection(s);
+    for (const auto& [group, pos] : group_names_) {
+      if (measurement_names_.count(group) || grouped_.count(group))
+        Report(pos, "sensor group " + Quoted(group) + " has the name of a measurement");
+    }
     return std::move(raw_);
   }
 
@@ -49,6 +53,8 @@ class SectionReader {
 
   void ReadSection(const IniSection& s) {
     if (s.kind == "measurement") return ReadMeasurement(s);
+    if (!s.group.empty())
+      return Report(s.group_pos, "only a [measurement NAME: GROUP] section takes a group");
     if (s.kind == "invariant") return ReadInvariantGroup(s);
     if (s.kind == "model" || s.kind == "states" || s.kind == "params" || s.kind == "let" ||
         s.kind == "rhs" || s.kind == "step") {
@@ -225,22 +231,65 @@ class SectionReader {
 
   void ReadMeasurement(const IniSection& s) {
     raw_.has_measurement_section = true;
+    if (!s.group.empty()) return ReadMeasurementGroup(s);
     if (!CheckSectionName(s, &measurement_names_)) return;
-    MeasurementDecl m{s.name, {}, s.kind_pos};
-    std::map<std::string, SourcePos> outputs;
+    if (grouped_.count(s.name)) {
+      Report(s.name_pos, "measurement " + Quoted(s.name) +
+                             " has sensor groups ([measurement " + s.name +
+                             ": GROUP]); give every section of it a group");
+      return;
+    }
+    MeasurementDecl m{s.name, {}, s.kind_pos, {}};
+    ReadOutputs(s, &m);
+    raw_.model.measurements.push_back(std::move(m));
+  }
+
+  // [measurement NAME: GROUP]: the outputs of one sensor, appended to
+  // measurement NAME as its group GROUP.
+  void ReadMeasurementGroup(const IniSection& s) {
+    if (s.name.empty() || !IsDashedName(s.name) || !IsDashedName(s.group)) {
+      Report(s.name.empty() || !IsDashedName(s.name) ? s.name_pos : s.group_pos,
+             "expected [measurement NAME: GROUP] with names of letters, digits, '_' and '-'");
+      return;
+    }
+    if (measurement_names_.count(s.name)) {
+      Report(s.name_pos, "measurement " + Quoted(s.name) + " is also given without a group (at " +
+                             LineRef(measurement_names_.at(s.name)) +
+                             "): give every section of it a group");
+      return;
+    }
+    const auto [first, inserted] = group_names_.insert({s.group, s.group_pos});
+    if (!inserted) {
+      Report(s.group_pos, "duplicate sensor group " + Quoted(s.group) + " (first at " +
+                              LineRef(first->second) + ")");
+      return;
+    }
+    auto [it, fresh] = grouped_.insert({s.name, raw_.model.measurements.size()});
+    if (fresh) raw_.model.measurements.push_back({s.name, {}, s.kind_pos, {}});
+    MeasurementDecl& m = raw_.model.measurements[it->second];
+    const int before = int(m.outputs.size());
+    ReadOutputs(s, &m);
+    m.groups.push_back({s.group, before, int(m.outputs.size()) - before, s.group_pos});
+  }
+
+  // The "output = expression" lines of a measurement section, appended to m.
+  void ReadOutputs(const IniSection& s, MeasurementDecl* m) {
     for (const IniEntry& e : s.entries) {
       if (!CheckName(e.key, e.key_pos)) continue;
-      const auto [first, inserted] = outputs.insert({e.key, e.key_pos});
-      if (!inserted) {
+      bool repeated = false;
+      for (const OutputDecl& o : m->outputs) {
+        if (o.name != e.key) continue;
         Report(e.key_pos, "duplicate output " + Quoted(e.key) + " in measurement " +
-                              Quoted(s.name) + " (first at " + LineRef(first->second) + ")");
-        continue;
+                              Quoted(s.name) + " (first at " + LineRef(o.pos) + ")");
+        repeated = true;
       }
-      m.outputs.push_back(ReadOutput(e));
+      if (!repeated) m->outputs.push_back(ReadOutput(e));
     }
-    if (s.entries.empty() && s.malformed_lines == 0)
-      Report(s.kind_pos, "measurement " + Quoted(s.name) + " has no outputs");
-    raw_.model.measurements.push_back(std::move(m));
+    if (s.entries.empty() && s.malformed_lines == 0) {
+      Report(s.kind_pos, "measurement " + Quoted(s.name) +
+                             (s.group.empty() ? "" : " group " + Quoted(s.group)) +
+                             " has no outputs");
+    }
   }
 
   // "name = expression [: angle]"
@@ -326,8 +375,9 @@ class SectionReader {
 
   std::vector<Diagnostic>* diagnostics_;
   RawModel raw_;
-  std::map<std::string, SourcePos> singletons_, model_keys_, measurement_names_, invariant_groups_,
-      invariant_names_;
+  std::map<std::string, SourcePos> singletons_, model_keys_, measurement_names_, group_names_,
+      invariant_groups_, invariant_names_;
+  std::map<std::string, size_t> grouped_;  // a grouped measurement's index in measurements
 };
 
 }  // namespace

@@ -10,15 +10,6 @@
 namespace estlab {
 namespace {
 
-std::vector<std::string> SplitOn(const std::string& text, char sep) {
-  std::vector<std::string> parts;
-  std::stringstream ss(text);
-  std::string part;
-  while (std::getline(ss, part, sep)) parts.push_back(Trim(part));
-  if (!text.empty() && text.back() == sep) parts.push_back("");
-  return parts;
-}
-
 EstimatedParam* Find(std::vector<EstimatedParam>* out, const std::string& name,
                      const std::string& option) {
   for (EstimatedParam& e : *out)
@@ -42,7 +33,7 @@ std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
                                                  const std::string& priors) {
   std::vector<EstimatedParam> out;
   if (!Trim(names).empty()) {
-    for (const std::string& name : SplitOn(names, ',')) {
+    for (const std::string& name : SplitTrimmed(names, ',')) {
       if (name.empty()) throw InputError("--estimate-param: empty name in '" + names + "'");
       for (const EstimatedParam& e : out)
         if (e.name == name) throw InputError("--estimate-param: '" + name + "' is named twice");
@@ -50,7 +41,7 @@ std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
     }
   }
   if (!Trim(bounds).empty()) {
-    for (const std::string& item : SplitOn(bounds, ',')) {
+    for (const std::string& item : SplitTrimmed(bounds, ',')) {
       const auto [name, range] = Assignment(item, "--param-bounds", "NAME=LO:HI");
       const size_t colon = range.find(':');
       if (colon == std::string::npos)
@@ -63,9 +54,9 @@ std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
     }
   }
   if (!Trim(priors).empty()) {
-    for (const std::string& item : SplitOn(priors, ',')) {
+    for (const std::string& item : SplitTrimmed(priors, ',')) {
       const auto [name, rest] = Assignment(item, "--param-prior", "NAME=normal:MEAN:SD");
-      const std::vector<std::string> parts = SplitOn(rest, ':');
+      const std::vector<std::string> parts = SplitTrimmed(rest, ':');
       if (parts.size() != 3 || parts[0] != "normal")
         throw InputError("--param-prior: expected NAME=normal:MEAN:SD, got '" + item + "'");
       EstimatedParam* e = Find(&out, name, "--param-prior");
@@ -83,7 +74,7 @@ std::vector<EstimatedParam> ParseEstimatedParams(const std::string& names,
 std::vector<std::string> ParseEstimatedStates(const std::string& names) {
   std::vector<std::string> out;
   if (Trim(names).empty()) return out;
-  for (const std::string& name : SplitOn(names, ',')) {
+  for (const std::string& name : SplitTrimmed(names, ',')) {
     if (name.empty()) throw InputError("--estimate-x0: an empty state name in '" + names + "'");
     out.push_back(name);
   }

@@ -18,7 +18,7 @@ const std::vector<FilterKey>& FilterKeyTable() {
   // clang-format off
   static const std::vector<FilterKey> table = {
       {"model", nullptr, "model name (see 'estlab list')", K::kValue, false, true},
-      {"measure", nullptr, "measurement name of the model", K::kValue, false, true},
+      {"measure", nullptr, "measurement name of the model, or its sensor groups, comma-separated (see 'estlab list')", K::kValue, false, true},
       {"filter", "ukf", "kf | ekf | iekf | ukf | ckf | ghkf | pf", K::kValue, false, true},
       {"param", nullptr, "model parameter name=value (repeatable)", K::kRepeatable, false, true},
       {"t0", nullptr, "time of the prior (default: the first row's time)", K::kValue, false, true},
@@ -37,8 +37,8 @@ const std::vector<FilterKey>& FilterKeyTable() {
       {"q-diag", nullptr, "process noise Q diagonal (per step)", K::kValue, true, true},
       {"q", nullptr, "process noise Q matrix \"a,b;c,d\" (per step)", K::kValue, true, true},
       {"q-white-accel", nullptr, "Q = qc [[dt^3/3, dt^2/2], [dt^2/2, dt]] per (position, rate) pair, dt of each step", K::kValue, true, true},
-      {"r-diag", nullptr, "measurement noise R diagonal", K::kValue, true, true},
-      {"r", nullptr, "measurement noise R matrix", K::kValue, true, true},
+      {"r-diag", nullptr, "measurement noise R diagonal, or one sensor group's: GROUP=a,b (repeatable, one per group)", K::kRepeatable, true, true},
+      {"r", nullptr, "measurement noise R matrix, or one sensor group's: GROUP=\"a,b;c,d\" (repeatable)", K::kRepeatable, true, true},
       {"linearize-at", nullptr, "kf: operating point name=value,... (default: the prior mean)", K::kRepeatable},
       {"iterations", "1", "ekf: update iterations (> 1 = iterated EKF; 'iekf' sets 3 by default)"},
       {"alpha", "1e-3", "ukf: spread alpha"},
@@ -120,6 +120,7 @@ class Reader {
   int Count(const std::string& key, int min_value, int max_value) const {
     return ForKey(key, [&] { return ParseCount(s_.Get(key), key, min_value, max_value); });
   }
+  std::vector<std::string> All(const std::string& key) const { return s_.GetAll(key); }
   std::vector<std::pair<std::string, double>> Assignments(const std::string& key) const {
     return ForKey(key, [&] { return ParseAssignments(s_.GetAll(key), key); });
   }
@@ -169,7 +170,75 @@ void ReadTransition(const Reader& r, const ModelEntry& model, TransitionOptions*
 }
 
 // Q (one of q-diag, q, q-white-accel) and R (one of r-diag, r).
-void ReadNoise(const Reader& r, const std::string& np, int n, int m, const std::string& meas,
+// R of one sensor group from "GROUP=values" of --KEY (a list for r-diag, a
+// matrix for r) into its block of spec->r (m x m).
+void ReadGroupR(const std::string& key, bool diag, const std::string& text,
+                const MeasurementDesc& meas, std::vector<bool>* seen, FilterSpec* spec) {
+  const size_t eq = text.find('=');
+  const std::string group = Trim(text.substr(0, eq)), values = text.substr(eq + 1);
+  const OutputGroup* g = meas.FindGroup(group);
+  if (g == nullptr) {
+    std::string known;
+    for (const OutputGroup& o : meas.groups) known += (known.empty() ? "" : ", ") + o.name;
+    throw KeyError(key, "unknown sensor group '" + group + "'" +
+                            (known.empty() ? " (measurement '" + meas.name + "' has none)"
+                                           : " (groups of " + meas.name + ": " + known + ")"));
+  }
+  const size_t index = size_t(g - meas.groups.data());
+  if ((*seen)[index]) throw KeyError(key, "sensor group '" + group + "' is given twice");
+  (*seen)[index] = true;
+  const int m = int(meas.outputs.size()), c = g->count;
+  std::vector<double> block(size_t(c * c), 0.0);
+  ForKey(key, [&] {
+    if (diag) {
+      const auto d = ParseList(values, key);
+      RequireLength(d, size_t(c), key, "one per output of group '" + group + "'");
+      for (int i = 0; i < c; ++i) block[size_t(i * c + i)] = d[size_t(i)];
+    } else {
+      block = ParseMatrix(values, c, key);
+    }
+    return cli::CheckCovariance(block, c, "R of group '" + group + "'", false), 0;
+  });
+  for (int i = 0; i < c; ++i)
+    for (int j = 0; j < c; ++j) spec->r[size_t((g->first + i) * m + g->first + j)] = block[size_t(i * c + j)];
+}
+
+// R (m x m): one of --r-diag, --r for all outputs, or a block per sensor
+// group ("GROUP=values", each group once; 0 between groups).
+void ReadR(const Reader& r, const std::string& np, const MeasurementDesc& meas, FilterSpec* spec) {
+  const std::string rd = np + "r-diag", rm = np + "r";
+  const std::vector<std::string> diags = r.All(rd), mats = r.All(rm);
+  bool grouped = false;
+  for (const auto* list : {&diags, &mats})
+    for (const std::string& t : *list) grouped = grouped || t.find('=') != std::string::npos;
+  const int m = int(meas.outputs.size());
+  if (!grouped) {
+    if (diags.size() + mats.size() != 1) {
+      throw KeyError(diags.size() > 1 ? rd : mats.size() > 1 ? rm : rd,
+                     diags.size() + mats.size() == 0
+                         ? "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)"
+                         : "give R once (or once per sensor group, GROUP=values)");
+    }
+    spec->r = r.DiagOrMatrix(rd, rm, m, "one per output of '" + meas.name + "'");
+    const std::string key = r.Given(rd) ? rd : rm;
+    ForKey(key, [&] { return cli::CheckCovariance(spec->r, m, "R", false), 0; });
+    return;
+  }
+  spec->r.assign(size_t(m * m), 0.0);
+  std::vector<bool> seen(meas.groups.size(), false);
+  for (const bool diag : {true, false}) {
+    const std::string& key = diag ? rd : rm;
+    for (const std::string& text : diag ? diags : mats) {
+      if (text.find('=') == std::string::npos)
+        throw KeyError(key, "give R for all outputs or per sensor group (GROUP=values), not both");
+      ReadGroupR(key, diag, text, meas, &seen, spec);
+    }
+  }
+  for (size_t i = 0; i < seen.size(); ++i)
+    if (!seen[i]) throw KeyError(rd, "no R for sensor group '" + meas.groups[i].name + "'");
+}
+
+void ReadNoise(const Reader& r, const std::string& np, int n, const MeasurementDesc& meas,
                FilterSpec* spec) {
   const std::string qd = np + "q-diag", qm = np + "q", qw = np + "q-white-accel";
   const int q_given = int(r.Given(qd)) + int(r.Given(qm)) + int(r.Given(qw));
@@ -185,12 +254,7 @@ void ReadNoise(const Reader& r, const std::string& np, int n, int m, const std::
     spec->q = r.DiagOrMatrix(qd, qm, n, "one per state");
     ForKey(key, [&] { return cli::CheckCovariance(spec->q, n, "Q", true), 0; });
   }
-  const std::string rd = np + "r-diag", rm = np + "r";
-  if (int(r.Given(rd)) + int(r.Given(rm)) != 1)
-    throw KeyError(rd, "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)");
-  spec->r = r.DiagOrMatrix(rd, rm, m, "one per output of '" + meas + "'");
-  const std::string key = r.Given(rd) ? rd : rm;
-  ForKey(key, [&] { return cli::CheckCovariance(spec->r, m, "R", false), 0; });
+  ReadR(r, np, meas, spec);
 }
 
 // A seed: a non-negative 64-bit integer, all digits.
@@ -317,11 +381,10 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   const Reader r(settings);
   FilterSpec spec;
   const int n = int(model.states.size());
-  spec.measurement = r.Text("measure");
   const MeasurementDesc& meas = ForKey("measure", [&]() -> const MeasurementDesc& {
-    return model.FindMeasurement(spec.measurement);
+    return model.FindMeasurement(r.Text("measure"));
   });
-  const int m = int(meas.outputs.size());
+  spec.measurement = meas.name;  // "imu,gps" names the measurement with those groups
   spec.params = ForKey("param", [&] { return model.ResolveParams(r.Assignments("param")); });
   ReadTransition(r, model, &spec.transition);
   if (r.Given("t0")) {
@@ -352,7 +415,7 @@ FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& mod
   }
   const std::string p0_key = r.Given("p0") ? "p0" : "p0-diag";
   ForKey(p0_key, [&] { return cli::CheckCovariance(spec.p0, n, "P0", false), 0; });
-  ReadNoise(r, settings.noise_prefix(), n, m, meas.name, &spec);
+  ReadNoise(r, settings.noise_prefix(), n, meas, &spec);
   spec.input = ReadConstantInput(r, model);
   spec.full_cov = r.Given("full-cov");
   ReadFilterKind(r, model, &spec);

@@ -22,8 +22,10 @@ const std::vector<TunerKey> kTunerKeys = {
      IsMl, "the ml estimator"},
     {"q-param", nullptr, "diag | full | white-accel | scalar | fixed (default: the --init-q* shape)",
      Noise, "the estimators of Q and R"},
-    {"r-param", nullptr, "diag | full | scalar | fixed (default: the --init-r* shape)", Noise,
-     "the estimators of Q and R"},
+    {"r-param", nullptr,
+     "diag | full | scalar | fixed (default: the --init-r* shape), or one per sensor group: "
+     "GROUP=KIND,... (ml; R is then block-diagonal)",
+     Noise, "the estimators of Q and R"},
     {"starts", "1", "number of starts (1 = the initial guess only)", MultiStart,
      "the ml estimator"},
     {"jobs", "1", "threads running the starts (same result for any value)", MultiStart,
@@ -103,6 +105,26 @@ NoiseParam NoiseParamOfGuess(const std::string& guess_key) {
   return NoiseParam::kDiag;
 }
 
+// "imu=full,gps=scalar": a kind per sensor group, each group once; `key`
+// is the option as written ("--r-param").
+std::vector<std::pair<std::string, NoiseParam>> ParseGroupNoiseParams(const std::string& text,
+                                                                      const std::string& key) {
+  std::vector<std::pair<std::string, NoiseParam>> out;
+  for (const std::string& item : SplitTrimmed(text, ',')) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError(key + ": expected GROUP=KIND, got '" + item + "'");
+    const std::string group = Trim(item.substr(0, eq));
+    for (const auto& [earlier, kind] : out)
+      if (earlier == group) throw InputError(key + ": sensor group '" + group + "' is given twice");
+    const NoiseParam kind = ParseNoiseParam(Trim(item.substr(eq + 1)), key);
+    if (kind == NoiseParam::kWhiteAccel)
+      throw InputError(key + ": white-accel applies to Q only (group '" + group + "')");
+    out.push_back({group, kind});
+  }
+  return out;
+}
+
 TunerOptions BuildTunerOptions(const TunerSettings& s, const std::string& q_guess,
                                const std::string& r_guess) {
   TunerOptions o;
@@ -138,7 +160,12 @@ TunerOptions BuildTunerOptions(const TunerSettings& s, const std::string& q_gues
   o.solver = Keyed("solver", s.Get("solver"),
                    [](const std::string& t, const std::string& k) { return ParseMlSolver(t, k); });
   o.q_param = noise("q-param", q_guess);
-  o.r_param = noise("r-param", r_guess);
+  if (s.Given("r-param") && s.Get("r-param").find('=') != std::string::npos) {
+    o.r_param = NoiseParamOfGuess(r_guess);
+    o.r_param_groups = Keyed("r-param", s.Get("r-param"), ParseGroupNoiseParams);
+  } else {
+    o.r_param = noise("r-param", r_guess);
+  }
   if (o.r_param == NoiseParam::kWhiteAccel)
     throw KeyError("r-param", "white-accel applies to Q only");
   constexpr int kMax = std::numeric_limits<int>::max();

@@ -37,6 +37,8 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
       d.outputs.push_back(Meas::kOutputs[j]);
       d.angle_outputs.push_back(Meas::kAngleOutputs[j]);
     }
+    for (const OutputGroupSpec& g : MeasurementGroups<Meas>())
+      d.groups.push_back({g.name, g.first, g.count});
     e.measurements.push_back(d);
   });
   for (const char* s : Model::kInvariantNames) e.invariants.push_back(s);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "src/core/parse.h"
 #include "src/registry/linked_models.h"
 #include "src/registry/model_plugin.h"
 
@@ -128,14 +129,59 @@ std::string ModelEntry::CheckIntegrator(Integrator integrator) const {
          " in none (they would stay frozen): use rk4, euler or cvodes";
 }
 
-const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) const {
+const OutputGroup* MeasurementDesc::FindGroup(const std::string& group) const {
+  for (const OutputGroup& g : groups)
+    if (g.name == group) return &g;
+  return nullptr;
+}
+
+namespace {
+
+// "a, b" of the group names of `m`.
+std::string GroupNames(const MeasurementDesc& m) {
   std::vector<std::string> names;
+  for (const OutputGroup& g : m.groups) names.push_back(g.name);
+  return Join(names);
+}
+
+}  // namespace
+
+const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) const {
+  std::vector<std::string> names, groups;
   for (const auto& m : measurements) {
     if (m.name == meas) return m;
     names.push_back(m.name);
+    for (const OutputGroup& g : m.groups) groups.push_back(g.name);
   }
-  throw InputError("unknown measurement '" + meas + "' for model '" + name +
-                   "' (known: " + Join(names) + ")");
+  const std::string known = " (known: " + Join(names) +
+                            (groups.empty() ? "" : "; sensor groups: " + Join(groups)) + ")";
+  // A list of sensor groups: all of one measurement's, each once.
+  const MeasurementDesc* found = nullptr;
+  std::vector<std::string> given;
+  for (const std::string& g : SplitTrimmed(meas, ',')) {
+    const MeasurementDesc* owner = nullptr;
+    for (const auto& m : measurements)
+      if (m.FindGroup(g) != nullptr) owner = &m;
+    if (owner == nullptr)
+      throw InputError("unknown measurement or sensor group '" + g + "' for model '" + name +
+                       "'" + known);
+    for (const std::string& earlier : given)
+      if (earlier == g) throw InputError("sensor group '" + g + "' is named twice in '" + meas + "'");
+    if (found != nullptr && found != owner)
+      throw InputError("sensor groups '" + given.front() + "' and '" + g +
+                       "' belong to different measurements ('" + found->name + "', '" +
+                       owner->name + "')");
+    found = owner;
+    given.push_back(g);
+  }
+  if (found == nullptr)
+    throw InputError("unknown measurement '" + meas + "' for model '" + name + "'" + known);
+  if (given.size() != found->groups.size())
+    throw InputError("'" + meas + "' names " + std::to_string(given.size()) + " of the " +
+                     std::to_string(found->groups.size()) + " sensor groups of measurement '" +
+                     found->name + "' (" + GroupNames(*found) +
+                     "): name them all, or the measurement");
+  return *found;
 }
 
 }  // namespace estlab

@@ -34,10 +34,21 @@ struct ParamDesc {
   Constraint constraint;
 };
 
+// A sensor group: outputs [first, first + count) of its measurement.
+struct OutputGroup {
+  std::string name;
+  int first = 0;
+  int count = 0;
+};
+
 struct MeasurementDesc {
   std::string name;
   std::vector<std::string> outputs;
   std::vector<bool> angle_outputs;
+  // Its sensor groups (models/model.h, kGroups); empty: one sensor.
+  std::vector<OutputGroup> groups;
+  // The group of a name, or null.
+  const OutputGroup* FindGroup(const std::string& group) const;
 };
 
 struct ModelEntry {
@@ -71,6 +82,10 @@ struct ModelEntry {
   // Full state from "name=value" pairs (unnamed states are 0).
   std::vector<double> ResolveState(const std::vector<std::pair<std::string, double>>& values,
                                    const std::string& option) const;
+  // A measurement by its name, or by its sensor groups' names, comma-
+  // separated in any order ("imu,gps" for a measurement with the groups
+  // gps and imu); throws InputError naming what is unknown, repeated or
+  // missing.
   const MeasurementDesc& FindMeasurement(const std::string& name) const;
   // "" when `integrator` can run this model, else why not: discrete-time
   // models and integrators (CheckIntegratorForModel), and semi-implicit

@@ -28,6 +28,7 @@
 #include "src/run/degeneracy.h"
 #include "src/run/filter_spec.h"
 #include "src/run/first_sample.h"
+#include "src/run/group_nis.h"
 #include "src/run/smoother_recorder.h"
 #include "src/run/step_loop.h"
 
@@ -335,6 +336,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   records.reserve(data.t.size());
   double nis_sum = 0.0;
   long nis_dof = 0;  // the observed components over all updates
+  GroupNisTally<Meas> group_nis;
   DegeneracyMonitor degeneracy;
 
   auto fail = [&](size_t k, const std::string& what) {
@@ -383,6 +385,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
       s.loglik += r.log_likelihood;
       nis_sum += r.nis;
       nis_dof += r.observed;
+      group_nis.Observe(r.innovation, r.innovation_cov);
       rec.nu = r.innovation;
       rec.S = r.innovation_cov;
       rec.nis = r.nis;
@@ -408,6 +411,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
 
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
   ChiSquareMeanBounds95(s.updates, nis_dof, s.nis_bounds95);
+  group_nis.Report(&s);
   if (adapter) s.adapt_clips = adapter->clip_count();
   if (degeneracy.observed()) ReportDegeneracy(degeneracy, data, &s);
   s.final_q.assign(Q.data(), Q.data() + N * N);  // symmetric: storage order irrelevant

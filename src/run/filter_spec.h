@@ -81,6 +81,16 @@ struct FilterSummary {
   long steps = 0;  // rows processed
   double mean_nis = 0.0;
   double nis_bounds95[2] = {0.0, 0.0};
+  // Per sensor group (a measurement with kGroups, models/model.h): the NIS
+  // of the group's observed components, nu_g' S_gg^-1 nu_g, over the updates
+  // that observed any of them; bounds with the observed components' count.
+  struct GroupNis {
+    std::string group;
+    long updates = 0;
+    double mean_nis = 0.0;
+    double nis_bounds95[2] = {0.0, 0.0};
+  };
+  std::vector<GroupNis> group_nis;
   double mean_nees = 0.0;
   double nees_bounds95[2] = {0.0, 0.0};
   double wall_s = 0.0;

@@ -42,6 +42,11 @@ struct SimulationSpec {
   std::vector<double> process_noise_cov;
   std::string measurement;             // empty = none
   std::vector<double> meas_noise_var;  // empty = none, else one per output
+  // Sensor rates (src/options/sensor_rates.h): empty = every output in every
+  // row; else one period per output, z_j measured in rows k = 0, e, 2e, ...
+  // and missing (NaN, an empty cell) in the others. The noise is drawn in
+  // every row, so the data equal the full-rate data with cells emptied.
+  std::vector<int> output_every;
   uint64_t seed = 1;
 };
 

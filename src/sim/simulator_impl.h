@@ -15,6 +15,7 @@
 #include <Eigen/Eigenvalues>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -112,6 +113,8 @@ SimulationResult Simulate(const SimulationSpec& spec) {
       for (size_t j = 0; j < y.size(); ++j) {
         double z = y[j];
         if (!spec.meas_noise_var.empty()) z += std::sqrt(spec.meas_noise_var[j]) * rng.Normal();
+        if (!spec.output_every.empty() && k % size_t(spec.output_every[j]) != 0)
+          z = std::numeric_limits<double>::quiet_NaN();  // not sampled in this row
         row.push_back(z);
       }
       if (spec.noise_free_outputs) row.insert(row.end(), y.begin(), y.end());

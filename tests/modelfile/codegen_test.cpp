@@ -355,6 +355,20 @@ TEST(Codegen, MeasurementsThatUseTheTimeTakeIt) {
   for (const char* e : expected) EXPECT_NE(h.find(e), std::string::npos) << e << "\nin:\n" << h;
 }
 
+TEST(Codegen, SensorGroupsBecomeTheMeasurementsGroups) {
+  const char* const text =
+      "[model]\nname = cart\n[states]\np = [m]\nv = [m/s]\n[rhs]\np = v\nv = -v\n"
+      "[measurement nav: imu]\nspeed = v\n[measurement nav: gps]\npos = p\n";
+  const std::string h = GenerateModelHeader(ParseModelFile(text, "cart.model"), "Cart");
+  EXPECT_NE(h.find("static constexpr std::array<const char*, 2> kOutputs = {\"speed\", \"pos\"};\n"
+                   "    static constexpr std::array<bool, 2> kAngleOutputs = {false, false};\n"
+                   "    static constexpr std::array<OutputGroupSpec, 2> kGroups = "
+                   "{{{\"imu\", 0, 1}, {\"gps\", 1, 1}}};"),
+            std::string::npos)
+      << h;
+  EXPECT_NE(h.find("using Measurements = std::tuple<NavMeasurement>;"), std::string::npos);
+}
+
 // The generated h(t, x, u) compiles for every scalar, satisfies the
 // contract, and EvalMeasurement passes it the time: at t = 2 the drift is
 // x + 2 d and the tachometer v cos(2 w) + F / 2.

@@ -73,6 +73,23 @@ std::vector<BadCase> BadCases() {
   return {
       {"unknown section", WithLines({{15, "[measurment pos]"}}),
        "t.model:15:2: ", "unknown section 'measurment'; did you mean 'measurement'?"},
+      {"sensor group named twice", WithLines({{15, "[measurement pos: a]"}, {17, "[measurement pos: a]\nv = v"}}),
+       "t.model:17:19: ", "duplicate sensor group 'a' (first at line 15)"},
+      {"grouped and plain sections of one measurement",
+       WithLines({{15, "[measurement pos: a]"}, {17, "[measurement pos]\nv = v"}}),
+       "t.model:17:14: ", "measurement 'pos' has sensor groups ([measurement pos: GROUP]); give every section of it a group"},
+      {"a plain section, then a grouped one",
+       WithLines({{17, "[measurement pos: a]\nv = v"}}),
+       "t.model:17:14: ", "measurement 'pos' is also given without a group (at line 15)"},
+      {"group named like a measurement",
+       WithLines({{15, "[measurement pos: vel]"}, {17, "[measurement vel]\nv = v"}}),
+       "t.model:15:19: ", "sensor group 'vel' has the name of a measurement"},
+      {"one output in two groups", WithLines({{15, "[measurement pos: a]"}, {17, "[measurement pos: b]\nx = v"}}),
+       "t.model:18:1: ", "duplicate output 'x' in measurement 'pos' (first at line 16)"},
+      {"a group on another section", WithLines({{4, "[states x: s]"}}),
+       "t.model:4:12: ", "only a [measurement NAME: GROUP] section takes a group"},
+      {"missing group name", WithLines({{15, "[measurement pos:]"}}),
+       "t.model:15:17: ", "missing group name after ':'"},
       {"unknown section, no suggestion", WithLines({{17, "[foo]"}}),
        "t.model:17:2: ", "unknown section 'foo'"},
       {"unknown key in [model]", WithLines({{3, "descripton = x"}}), "t.model:3:1: ",
@@ -396,6 +413,25 @@ TEST(ModelFile, ValidFileParsesToTheExpectedStructure) {
   EXPECT_EQ(m.invariants[0].name, "energy");
   EXPECT_EQ(m.invariants[0].group, "energy");
   EXPECT_EQ(m.invariants[0].zero_when, (std::vector<std::string>{"c", "u"}));
+}
+
+TEST(ModelFile, SensorGroupSectionsJoinIntoOneMeasurement) {
+  const ModelFile m = ParseModelFile(WithLines({{15, "[measurement nav: imu]"},
+                                                {16, "v = v\na = -k * x"},
+                                                {17, "[measurement nav : gps ]\nx = x"}}),
+                                     "t.model");
+  ASSERT_EQ(m.measurements.size(), 1u);
+  const MeasurementDecl& nav = m.measurements[0];
+  EXPECT_EQ(nav.name, "nav");
+  ASSERT_EQ(nav.outputs.size(), 3u);
+  EXPECT_EQ(nav.outputs[2].name, "x");
+  ASSERT_EQ(nav.groups.size(), 2u);
+  EXPECT_EQ(nav.groups[0].name, "imu");
+  EXPECT_EQ(nav.groups[0].first, 0);
+  EXPECT_EQ(nav.groups[0].count, 2);
+  EXPECT_EQ(nav.groups[1].name, "gps");
+  EXPECT_EQ(nav.groups[1].first, 2);
+  EXPECT_EQ(nav.groups[1].count, 1);
 }
 
 TEST(ModelFile, StepModelsSectionsInAnyOrderAndDtInLets) {

@@ -66,6 +66,55 @@ TEST_F(StudyCli, JobsDoNotChangeTheResults) {
             std::string::npos);
 }
 
+// Issue 35, done-when 3: a scenario with two sensor groups at their own rates
+// (the cart's position at 1 Hz, the pole's encoder at 100 Hz) gives the same
+// bytes with --jobs 1 and --jobs 2, through filters, the particle filter and a
+// tuner with an R per group; the position is missing between its samples.
+TEST_F(StudyCli, TwoSensorRatesGiveTheSameBytesForAnyJobs) {
+  WriteText(dir_.File("s.ini"),
+            "[study]\nname = multirate\nseed = 11\nruns = 4\nkeep-runs = 1\n\n"
+            "[scenario.cart]\nmodel = cart-pole\nx0 = theta=3\ndt = 0.01\nsteps = 300\n"
+            "process-noise = diag 1e-8,1e-6,1e-8,1e-6\nmeasurement = position,encoder\n"
+            "meas-noise-var = 1e-4,1e-4\nsensor-rate = position=1\n"
+            "prior-p0-diag = 1e-4,1e-4,1e-4,1e-4\n\n"
+            "[filter.ekf]\nkind = ekf\n\n[filter.pf]\nkind = pf\nparticles = 200\n\n"
+            "[noise.oracle]\nq = oracle\nr = oracle\n\n"
+            "[noise.tuned]\nq = oracle\nr = tuned\ninit-r-diag = 1e-3,1e-3\n"
+            "r-param = position=scalar,encoder=scalar\nfilters = ekf\n");
+  const auto r1 = RunEstlab("study s.ini --out j1 --jobs 1 --quiet", dir_.path());
+  ASSERT_EQ(r1.exit_code, 0) << r1.err;
+  const auto r2 = RunEstlab("study s.ini --out j2 --jobs 2 --quiet", dir_.path());
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  for (const char* f : {"runs.csv", "summary.csv", "steps.csv", "time_metrics.csv"})
+    EXPECT_EQ(ReadFile(dir_.File(std::string("j1/") + f)),
+              ReadFile(dir_.File(std::string("j2/") + f)))
+        << f;
+  const auto lines = SplitLines(RunsCsv(dir_, "j1"));
+  ASSERT_EQ(lines.size(), 1u + 4 * 3);  // ekf x 2 noises + pf x oracle, 4 runs
+  for (size_t i = 1; i < lines.size(); ++i)
+    EXPECT_NE(lines[i].find(",ok,"), std::string::npos) << lines[i];
+  // The kept run's data: the position only at t = 1, 2, 3 (rows 100, 200,
+  // 300), the angle in every row; the report's NIS bounds count them.
+  const std::vector<std::string> series =
+      SplitLines(ReadFile(dir_.File("j1/timeseries/cart/run1_ekf_oracle.csv")));
+  ASSERT_EQ(series.size(), 301u);
+  ASSERT_NE(series[0].find(",z_x,z_theta"), std::string::npos) << series[0];
+  int positions = 0;
+  for (size_t k = 1; k < series.size(); ++k) {
+    const size_t last = series[k].rfind(',');
+    const size_t before = series[k].rfind(',', last - 1);
+    const bool has_x = last > before + 1;
+    EXPECT_EQ(has_x, k % 100 == 0) << series[k].substr(0, 12);
+    positions += has_x;
+  }
+  EXPECT_EQ(positions, 3);
+  EXPECT_NE(ReadFile(dir_.File("j1/report.md"))
+                .find("NIS (dimension 2, 303 observed components over 300 updates)"),
+            std::string::npos);
+  EXPECT_NE(ReadFile(dir_.File("j1/tuned.csv")).find(",position=scalar encoder=scalar,"),
+            std::string::npos);
+}
+
 // Issue 15 item 7: resuming a complete folder with fewer --runs used to cut
 // runs.csv down silently; it is refused (exit 2, the folder untouched)
 // unless --force.
