@@ -64,7 +64,11 @@ class CovarianceParam {
                   const std::vector<std::pair<int, int>>& pairs,
                   const InitialCovariance<D>& initial, double dt_ref,
                   std::vector<CovarianceBlock> blocks = {})
-      : kind_(kind), symbol_(symbol), names_(component_names), pairs_(pairs), initial_(initial),
+      : kind_(kind),
+        symbol_(symbol),
+        names_(component_names),
+        pairs_(pairs),
+        initial_(initial),
         blocks_(std::move(blocks)) {
     const std::string what = symbol == "q" ? "Q" : "R";
     const Mat<D, D> m0 = initial.white_accel ? WhiteAccel(initial.qc, dt_ref) : initial.matrix;
@@ -76,8 +80,7 @@ class CovarianceParam {
             "model's position/rate pairs)");
       }
       if (!initial.white_accel || !(initial.qc > 0)) {
-        throw InputError(
-            "white-accel tuning of Q needs an initial qc > 0 (--init-q-white-accel)");
+        throw InputError("white-accel tuning of Q needs an initial qc > 0 (--init-q-white-accel)");
       }
       theta0_.push_back(std::log(initial.qc));
       AddName("log qc", true);

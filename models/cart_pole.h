@@ -95,8 +95,8 @@ struct CartPole {
     static constexpr std::array<bool, 2> kAngleOutputs = {false, true};
     // Two sensors, e.g. a slow position fix and a fast pole encoder, each
     // with its own R and rate (--measure position,encoder; docs/multirate.md).
-    static constexpr std::array<OutputGroupSpec, 2> kGroups = {{{"position", 0, 1},
-                                                                {"encoder", 1, 1}}};
+    static constexpr std::array<OutputGroupSpec, 2> kGroups = {
+        {{"position", 0, 1}, {"encoder", 1, 1}}};
     template <class T>
     static Vec<T, 2> Eval(const Vec<T, 4>& x, const Params& /*p*/) {
       return Vec<T, 2>(x(0), x(2));

@@ -289,8 +289,8 @@ TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, TuningProgres
       {key.scenario, key.filter, key.noise, failure.empty() ? TuneStatusName(r.status) : "failed",
        std::to_string(cb.tune_datasets), std::to_string(r.updates), Sig10(r.nll_initial),
        Sig10(r.nll_tuned), std::to_string(r.iterations), NoiseParamName(cb.tuner.q_param),
-       RParamText(cb.tuner), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q),
-       JoinValues(r.r), failure, TunedParamsText(r)});
+       RParamText(cb.tuner), r.q_white_accel ? Sig10(r.qc) : "", JoinValues(r.q), JoinValues(r.r),
+       failure, TunedParamsText(r)});
   return t;
 }
 

@@ -259,7 +259,12 @@ void WriteSummaryJson(const FilterSummary& s, JsonWriter& j,
   if (!s.group_nis.empty()) {
     j.Key("group_nis").BeginObject();
     for (const FilterSummary::GroupNis& g : s.group_nis) {
-      j.Key(g.group).BeginObject().Key("updates").Value(g.updates).Key("mean_nis").Value(g.mean_nis);
+      j.Key(g.group)
+          .BeginObject()
+          .Key("updates")
+          .Value(g.updates)
+          .Key("mean_nis")
+          .Value(g.mean_nis);
       j.Key("nis_bounds95").Value(std::vector<double>{g.nis_bounds95[0], g.nis_bounds95[1]});
       j.EndObject();
     }

@@ -337,11 +337,11 @@ int RunSimulate(const std::vector<std::string>& args) {
       RequireNonNegative(spec.meas_noise_var, "--meas-noise-var");
     }
     auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
-    spec.output_every = OutputEvery(meas, text("sensor-rate"), text("sensor-every"),
-                                    vm.count("data") ? 0.0  // the record's times
-                                                     : ParseNumber(vm["dt"].as<std::string>(),
-                                                                   "--dt"),
-                                    "--sensor-rate", "--sensor-every");
+    spec.output_every =
+        OutputEvery(meas, text("sensor-rate"), text("sensor-every"),
+                    vm.count("data") ? 0.0  // the record's times
+                                     : ParseNumber(vm["dt"].as<std::string>(), "--dt"),
+                    "--sensor-rate", "--sensor-every");
   } else if (vm.count("meas-noise-var") || vm.count("sensor-rate") || vm.count("sensor-every")) {
     throw InputError("--meas-noise-var, --sensor-rate and --sensor-every need --measure");
   }

@@ -834,9 +834,9 @@ int RunTune(const std::vector<std::string>& args) {
                     << result.message << "\n";
     out->stream() << ProcessModelLines(model, spec);
     out->stream() << IniLine("q", result.q_param, result.q_white_accel, result.qc, result.q, n);
-    out->stream() << IniLine(
-        "r", result.r_param_groups.empty() ? result.r_param : NoiseParam::kFixed, false, 0.0,
-        result.r, m);
+    out->stream() << IniLine("r",
+                             result.r_param_groups.empty() ? result.r_param : NoiseParam::kFixed,
+                             false, 0.0, result.r, m);
     for (size_t i = 0; i < result.param_names.size(); ++i)
       out->stream() << "param = " << result.param_names[i] << "="
                     << FormatDouble(result.param_values[i]) << "\n";

@@ -234,9 +234,8 @@ class SectionReader {
     if (!s.group.empty()) return ReadMeasurementGroup(s);
     if (!CheckSectionName(s, &measurement_names_)) return;
     if (grouped_.count(s.name)) {
-      Report(s.name_pos, "measurement " + Quoted(s.name) +
-                             " has sensor groups ([measurement " + s.name +
-                             ": GROUP]); give every section of it a group");
+      Report(s.name_pos, "measurement " + Quoted(s.name) + " has sensor groups ([measurement " +
+                             s.name + ": GROUP]); give every section of it a group");
       return;
     }
     MeasurementDecl m{s.name, {}, s.kind_pos, {}};

@@ -200,7 +200,8 @@ void ReadGroupR(const std::string& key, bool diag, const std::string& text,
     return cli::CheckCovariance(block, c, "R of group '" + group + "'", false), 0;
   });
   for (int i = 0; i < c; ++i)
-    for (int j = 0; j < c; ++j) spec->r[size_t((g->first + i) * m + g->first + j)] = block[size_t(i * c + j)];
+    for (int j = 0; j < c; ++j)
+      spec->r[size_t((g->first + i) * m + g->first + j)] = block[size_t(i * c + j)];
 }
 
 // R (m x m): one of --r-diag, --r for all outputs, or a block per sensor
@@ -214,7 +215,9 @@ void ReadR(const Reader& r, const std::string& np, const MeasurementDesc& meas, 
   const int m = int(meas.outputs.size());
   if (!grouped) {
     if (diags.size() + mats.size() != 1) {
-      throw KeyError(diags.size() > 1 ? rd : mats.size() > 1 ? rm : rd,
+      throw KeyError(diags.size() > 1  ? rd
+                     : mats.size() > 1 ? rm
+                                       : rd,
                      diags.size() + mats.size() == 0
                          ? "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)"
                          : "give R once (or once per sensor group, GROUP=values)");

@@ -153,8 +153,8 @@ const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) cons
     names.push_back(m.name);
     for (const OutputGroup& g : m.groups) groups.push_back(g.name);
   }
-  const std::string known = " (known: " + Join(names) +
-                            (groups.empty() ? "" : "; sensor groups: " + Join(groups)) + ")";
+  const std::string known =
+      " (known: " + Join(names) + (groups.empty() ? "" : "; sensor groups: " + Join(groups)) + ")";
   // A list of sensor groups: all of one measurement's, each once.
   const MeasurementDesc* found = nullptr;
   std::vector<std::string> given;
@@ -163,10 +163,11 @@ const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) cons
     for (const auto& m : measurements)
       if (m.FindGroup(g) != nullptr) owner = &m;
     if (owner == nullptr)
-      throw InputError("unknown measurement or sensor group '" + g + "' for model '" + name +
-                       "'" + known);
+      throw InputError("unknown measurement or sensor group '" + g + "' for model '" + name + "'" +
+                       known);
     for (const std::string& earlier : given)
-      if (earlier == g) throw InputError("sensor group '" + g + "' is named twice in '" + meas + "'");
+      if (earlier == g)
+        throw InputError("sensor group '" + g + "' is named twice in '" + meas + "'");
     if (found != nullptr && found != owner)
       throw InputError("sensor groups '" + given.front() + "' and '" + g +
                        "' belong to different measurements ('" + found->name + "', '" +

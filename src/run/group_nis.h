@@ -52,9 +52,8 @@ class GroupNisTally {
         }
         if (observed == 0) continue;
         const Eigen::LLT<Mat<M, M>> llt(s);
-        const double nis = llt.info() == Eigen::Success
-                               ? v.dot(llt.solve(v))
-                               : std::numeric_limits<double>::quiet_NaN();
+        const double nis = llt.info() == Eigen::Success ? v.dot(llt.solve(v))
+                                                        : std::numeric_limits<double>::quiet_NaN();
         sum_[g] += nis;
         dof_[g] += observed;
         ++updates_[g];
@@ -69,8 +68,8 @@ class GroupNisTally {
         FilterSummary::GroupNis out;
         out.group = kGroups[g].name;
         out.updates = updates_[g];
-        out.mean_nis = updates_[g] ? sum_[g] / double(updates_[g])
-                                   : std::numeric_limits<double>::quiet_NaN();
+        out.mean_nis =
+            updates_[g] ? sum_[g] / double(updates_[g]) : std::numeric_limits<double>::quiet_NaN();
         ChiSquareMeanBounds95(updates_[g], dof_[g], out.nis_bounds95);
         s->group_nis.push_back(out);
       }

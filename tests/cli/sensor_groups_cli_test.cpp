@@ -41,8 +41,8 @@ class SensorGroupsCli : public ::testing::Test {
     const auto r = RunEstlab(args, dir_.path());
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
     EXPECT_NE(r.err.find("estlab: error:"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\nexpected: " << message
-                                                      << "\ngot: " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos)
+        << args << "\nexpected: " << message << "\ngot: " << r.err;
     EXPECT_FALSE(dir_.Exists(out)) << args;
   }
   TempDir dir_;

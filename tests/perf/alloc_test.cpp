@@ -237,8 +237,7 @@ Vec<double, Model::kStateDim> StartState() {
 // before counting starts. gaps: the last component missing (NaN) in two of
 // every three steps, a slower sensor (the subset update, issue 35).
 template <class Model, class Meas>
-std::vector<Vec<double, Meas::kDim>> Measurements(const typename Model::Params& params,
-                                                   bool gaps) {
+std::vector<Vec<double, Meas::kDim>> Measurements(const typename Model::Params& params, bool gaps) {
   TransitionOptions topt;
   topt.integrator = Integrator::kRk4;
   auto truth = MakeTransition<Model>(params, topt);

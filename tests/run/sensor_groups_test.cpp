@@ -159,14 +159,17 @@ TEST(SensorGroups, MeasureNamesTheMeasurementWithThoseGroups) {
   ASSERT_EQ(m.groups.size(), 2u);
   EXPECT_EQ(m.groups[0].name, "position");
   EXPECT_EQ(m.groups[1].first, 1);
-  EXPECT_NE(ErrorOf([&] { model.FindMeasurement("position,position"); })
-                .find("sensor group 'position' is named twice"),
+  EXPECT_NE(ErrorOf([&] {
+              model.FindMeasurement("position,position");
+            }).find("sensor group 'position' is named twice"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { model.FindMeasurement("position"); })
-                .find("names 1 of the 2 sensor groups of measurement 'x-theta'"),
+  EXPECT_NE(ErrorOf([&] {
+              model.FindMeasurement("position");
+            }).find("names 1 of the 2 sensor groups of measurement 'x-theta'"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { model.FindMeasurement("gyro,encoder"); })
-                .find("unknown measurement or sensor group 'gyro'"),
+  EXPECT_NE(ErrorOf([&] {
+              model.FindMeasurement("gyro,encoder");
+            }).find("unknown measurement or sensor group 'gyro'"),
             std::string::npos);
 }
 
@@ -191,9 +194,10 @@ TEST(SensorGroups, RPerGroupFillsItsBlock) {
     for (const auto& [k, v] : r) t.Add(k, v);
     return ErrorOf([&] { BuildFilterSpec(t, model); });
   };
-  EXPECT_NE(error({{"r-diag", "gyro=1"}, {"r-diag", "position=1"}, {"r-diag", "encoder=1"}})
-                .find("--r-diag: unknown sensor group 'gyro' (groups of x-theta: position, encoder)"),
-            std::string::npos);
+  EXPECT_NE(
+      error({{"r-diag", "gyro=1"}, {"r-diag", "position=1"}, {"r-diag", "encoder=1"}})
+          .find("--r-diag: unknown sensor group 'gyro' (groups of x-theta: position, encoder)"),
+      std::string::npos);
   EXPECT_NE(error({{"r-diag", "position=1"}, {"r", "position=2"}, {"r-diag", "encoder=1"}})
                 .find("sensor group 'position' is given twice"),
             std::string::npos);
@@ -206,12 +210,13 @@ TEST(SensorGroups, RPerGroupFillsItsBlock) {
   EXPECT_NE(error({{"r-diag", "position=-1"}, {"r-diag", "encoder=1"}}).find("--r-diag"),
             std::string::npos);
   // The whole form still works, and twice is refused.
-  EXPECT_EQ(BuildFilterSpec([&] {
-              FilterSettings t = CartPoleSettings();
-              t.Add("r-diag", "0.5,0.25");
-              return t;
-            }(),
-                            model)
+  EXPECT_EQ(BuildFilterSpec(
+                [&] {
+                  FilterSettings t = CartPoleSettings();
+                  t.Add("r-diag", "0.5,0.25");
+                  return t;
+                }(),
+                model)
                 .r,
             (std::vector<double>{0.5, 0.0, 0.0, 0.25}));
   EXPECT_NE(error({{"r-diag", "1,1"}, {"r-diag", "2,2"}}).find("give R once"), std::string::npos);
@@ -221,8 +226,9 @@ TEST(SensorGroups, BlockwiseCovarianceEqualsTheHandBlockDiagonalMatrix) {
   const std::vector<std::string> names = {"acc", "speed", "pos"};
   InitialCovariance<3> initial;
   initial.matrix = kR;
-  const CovarianceParam<3> r(NoiseParam::kDiag, "r", names, {}, initial, 0.0,
-                             {{NoiseParam::kFull, 0, 2, "imu"}, {NoiseParam::kScalar, 2, 1, "gps"}});
+  const CovarianceParam<3> r(
+      NoiseParam::kDiag, "r", names, {}, initial, 0.0,
+      {{NoiseParam::kFull, 0, 2, "imu"}, {NoiseParam::kScalar, 2, 1, "gps"}});
   EXPECT_TRUE(r.Blockwise());
   ASSERT_EQ(r.NumParams(), 4);
   EXPECT_EQ(r.Names()[3], "log r_gps");
@@ -324,8 +330,9 @@ TEST(SensorGroups, TunerWithBlockwiseRIsTheRunsLikelihoodAndItsGradientIsExact) 
             std::string::npos);
   TunerOptions em = options;
   em.estimator = Estimator::kEm;
-  EXPECT_NE(ErrorOf([&] { TuneWith<Cart, Cart::Nav>(CartSpec(KfOptions{}), em, datasets); })
-                .find("is for the ml estimator; em takes one kind"),
+  EXPECT_NE(ErrorOf([&] {
+              TuneWith<Cart, Cart::Nav>(CartSpec(KfOptions{}), em, datasets);
+            }).find("is for the ml estimator; em takes one kind"),
             std::string::npos);
 }
 
@@ -335,20 +342,24 @@ TEST(SensorGroups, RatesBecomeEachOutputsPeriod) {
   EXPECT_EQ(OutputEvery(m, "", "encoder=3", 0.0, "rate", "every"), (std::vector<int>{1, 3}));
   EXPECT_EQ(OutputEvery(m, "encoder=100", "position=20", 0.01, "rate", "every"),
             (std::vector<int>{20, 1}));
-  EXPECT_NE(ErrorOf([&] { OutputEvery(m, "position=3", "", 0.01, "rate", "every"); })
-                .find("rate: position at 3 Hz is 33.3"),
+  EXPECT_NE(ErrorOf([&] {
+              OutputEvery(m, "position=3", "", 0.01, "rate", "every");
+            }).find("rate: position at 3 Hz is 33.3"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { OutputEvery(m, "position=1", "position=2", 0.01, "rate", "every"); })
-                .find("every: sensor group 'position' is given twice"),
+  EXPECT_NE(ErrorOf([&] {
+              OutputEvery(m, "position=1", "position=2", 0.01, "rate", "every");
+            }).find("every: sensor group 'position' is given twice"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { OutputEvery(m, "imu=1", "", 0.01, "rate", "every"); })
-                .find("rate: unknown sensor group 'imu' (groups of x-theta: position, encoder)"),
+  EXPECT_NE(ErrorOf([&] {
+              OutputEvery(m, "imu=1", "", 0.01, "rate", "every");
+            }).find("rate: unknown sensor group 'imu' (groups of x-theta: position, encoder)"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { OutputEvery(m, "position=1", "", 0.0, "rate", "every"); })
-                .find("uniform grid"),
-            std::string::npos);
-  EXPECT_NE(ErrorOf([&] { OutputEvery(m, "", "encoder=0", 0.01, "rate", "every"); })
-                .find("every (encoder)"),
+  EXPECT_NE(
+      ErrorOf([&] { OutputEvery(m, "position=1", "", 0.0, "rate", "every"); }).find("uniform grid"),
+      std::string::npos);
+  EXPECT_NE(ErrorOf([&] {
+              OutputEvery(m, "", "encoder=0", 0.01, "rate", "every");
+            }).find("every (encoder)"),
             std::string::npos);
 }
 
