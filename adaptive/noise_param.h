@@ -86,12 +86,16 @@ class CovarianceParam {
       AddName("log qc", true);
       return;
     }
-    // All diag or all fixed blocks are that kind over the whole matrix.
+    // One block, or all diag or all fixed blocks: that kind over the whole
+    // matrix (EM and ALS take it); all fixed keeps 0 between the groups.
     bool same = !blocks_.empty();
     for (const CovarianceBlock& b : blocks_)
       same = same && b.kind == blocks_.front().kind &&
-             (b.kind == NoiseParam::kDiag || b.kind == NoiseParam::kFixed);
-    if (same) kind_ = blocks_.front().kind;
+             (blocks_.size() == 1 || b.kind == NoiseParam::kDiag || b.kind == NoiseParam::kFixed);
+    if (same) {
+      kind_ = blocks_.front().kind;
+      if (kind_ == NoiseParam::kFixed) ZeroBetweenBlocks(&initial_.matrix);
+    }
     if (same || blocks_.empty()) blocks_.assign(1, {kind_, 0, D, ""});
     int next = 0;
     for (const CovarianceBlock& b : blocks_) {
@@ -182,6 +186,28 @@ class CovarianceParam {
   }
 
  private:
+  // The lower Cholesky factor of block b of m0 (fixed-size for the whole
+  // matrix, as before blocks existed); empty when it is not positive
+  // definite.
+  static Eigen::MatrixXd BlockCholesky(const CovarianceBlock& b, const Mat<D, D>& m0) {
+    if (b.count == D) {
+      const Eigen::LLT<Mat<D, D>> llt(m0);
+      if (llt.info() != Eigen::Success || !(m0.diagonal().minCoeff() > 0)) return {};
+      return Mat<D, D>(llt.matrixL());
+    }
+    const Eigen::MatrixXd block = m0.block(b.first, b.first, b.count, b.count);
+    const Eigen::LLT<Eigen::MatrixXd> llt(block);
+    if (llt.info() != Eigen::Success || !(block.diagonal().minCoeff() > 0)) return {};
+    return llt.matrixL();
+  }
+
+  // m's entries between different blocks set to 0.
+  void ZeroBetweenBlocks(Mat<D, D>* m) const {
+    for (const CovarianceBlock& a : blocks_)
+      for (const CovarianceBlock& b : blocks_)
+        if (a.first != b.first) m->block(a.first, b.first, a.count, b.count).setZero();
+  }
+
   // The initial parameters and names of block b of the initial matrix m0.
   void AddBlock(const CovarianceBlock& b, const std::string& what, const Mat<D, D>& m0) {
     const int e = b.first + b.count;
@@ -198,14 +224,12 @@ class CovarianceParam {
         }
         break;
       case NoiseParam::kFull: {
-        const Eigen::MatrixXd block = m0.block(b.first, b.first, b.count, b.count);
-        const Eigen::LLT<Eigen::MatrixXd> llt(block);
-        if (llt.info() != Eigen::Success || !(block.diagonal().minCoeff() > 0)) {
+        const Eigen::MatrixXd L = BlockCholesky(b, m0);
+        if (L.size() == 0) {
           throw InputError("full (log-Cholesky) tuning of " + what +
                            (b.label.empty() ? "" : " (group " + b.label + ")") +
                            " needs a positive definite initial matrix");
         }
-        const Eigen::MatrixXd L = llt.matrixL();
         for (int i = 0; i < b.count; ++i) {
           const std::string& ni = names_[b.first + i];
           for (int j = 0; j < i; ++j) {
@@ -220,7 +244,11 @@ class CovarianceParam {
       }
       case NoiseParam::kScalar: {
         const double sc = m0.block(b.first, b.first, b.count, b.count).trace() / b.count;
-        if (!(sc > 0)) throw InputError("scalar tuning of " + what + " needs trace > 0");
+        if (!(sc > 0)) {
+          throw InputError("scalar tuning of " + what +
+                           (b.label.empty() ? "" : " (group " + b.label + ")") +
+                           " needs trace > 0");
+        }
         theta0_.push_back(std::log(sc));
         AddName("log " + symbol_ + (b.label.empty() ? "" : "_" + b.label), true);
         break;

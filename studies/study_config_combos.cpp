@@ -64,6 +64,12 @@ TunerOptions StudyTunerOptions(const SectionValues& noise, const ScenarioConfig&
     if (!tuned) p = NoiseParam::kFixed;
     if (tuned && p == NoiseParam::kFixed) noise.Fail(which + "-param", "fixed contradicts tuned");
   }
+  // R per sensor group: none when R is not tuned; not every group fixed.
+  if (!r_tuned) t.r_param_groups.clear();
+  bool all_fixed = !t.r_param_groups.empty();
+  for (const auto& [group, kind] : t.r_param_groups)
+    all_fixed = all_fixed && kind == NoiseParam::kFixed;
+  if (all_fixed) noise.Fail("r-param", "every sensor group fixed contradicts tuned");
   return t;
 }
 

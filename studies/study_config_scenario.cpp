@@ -246,14 +246,15 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
       return list;
     });
   }
-  for (const char* key : {"sensor-rate", "sensor-every"}) {  // one call reads both
+  // The rates alone, then with the every-k groups: an error at its key's line.
+  auto text = [&](const char* k) { return v.Has(k) ? get(k)->text : std::string(); };
+  for (const bool with_every : {false, true}) {
+    const char* key = with_every ? "sensor-every" : "sensor-rate";
     if (!v.Has(key)) continue;
     truth.output_every = Checked(*get(key), err, [&](const std::string&) {
-      auto text = [&](const char* k) { return v.Has(k) ? get(k)->text : std::string(); };
-      return OutputEvery(meas, text("sensor-rate"), text("sensor-every"), truth.dt, "sensor-rate",
-                         "sensor-every");
+      return OutputEvery(meas, text("sensor-rate"), with_every ? text("sensor-every") : "",
+                         truth.dt, "sensor-rate", "sensor-every");
     });
-    break;
   }
   sc.oracle_r.assign(m * m, 0.0);
   for (int j = 0; j < m; ++j) sc.oracle_r[j * m + j] = truth.meas_noise_var[j];

@@ -50,7 +50,7 @@ RunIdentification IdentifyInRun(const ScenarioConfig& sc, const Combo& combo,
     id.q_err = RelativeFrobeniusError(r.q, sc.oracle_q);
     id.q_ratio = DiagonalRatios(r.q, sc.oracle_q);
   }
-  if (options.r_param != NoiseParam::kFixed) {
+  if (r.r_param != NoiseParam::kFixed) {  // the tuned kind: groups all fixed are fixed
     id.r_err = RelativeFrobeniusError(r.r, sc.oracle_r);
     id.r_ratio = DiagonalRatios(r.r, sc.oracle_r);
   }

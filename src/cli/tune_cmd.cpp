@@ -223,6 +223,49 @@ std::string GuessKey(const po::variables_map& vm, const std::string& which) {
   return "";
 }
 
+// A full R's covariance of two outputs that no row observes together
+// (sensors at their own rates, a row per sensor) is a parameter the
+// likelihood does not depend on: a note before the fit, naming the pairs.
+void NoteNeverCoObserved(const TunerOptions& options, const MeasurementDesc& meas,
+                         const std::vector<FilterData>& datasets) {
+  const int m = int(meas.outputs.size());
+  std::vector<bool> full(size_t(m),
+                         options.r_param_groups.empty() && options.r_param == NoiseParam::kFull);
+  std::vector<int> block(size_t(m), 0);  // full blocks of groups: pairs within one
+  for (size_t g = 0; g < meas.groups.size(); ++g) {
+    const OutputGroup& group = meas.groups[g];
+    for (int j = group.first; j < group.first + group.count; ++j) block[size_t(j)] = int(g);
+    for (const auto& [name, kind] : options.r_param_groups)
+      if (name == group.name)
+        for (int j = group.first; j < group.first + group.count; ++j)
+          full[size_t(j)] = kind == NoiseParam::kFull;
+  }
+  std::vector<bool> together(size_t(m * m), false);
+  for (const FilterData& d : datasets)
+    for (size_t k = 0; k < d.t.size(); ++k)
+      for (int a = 0; a < m; ++a)
+        for (int b = a + 1; b < m; ++b)
+          if (std::isfinite(d.z[k * size_t(m) + size_t(a)]) &&
+              std::isfinite(d.z[k * size_t(m) + size_t(b)]))
+            together[size_t(a * m + b)] = true;
+  std::string pairs;
+  for (int a = 0; a < m; ++a)
+    for (int b = a + 1; b < m; ++b) {
+      const bool tuned = full[size_t(a)] && full[size_t(b)] &&
+                         (options.r_param_groups.empty() || block[size_t(a)] == block[size_t(b)]);
+      if (!tuned || together[size_t(a * m + b)]) continue;
+      pairs += pairs.empty() ? "R(" : ", R(";
+      pairs += meas.outputs[size_t(a)];
+      pairs += ',';
+      pairs += meas.outputs[size_t(b)];
+      pairs += ')';
+    }
+  if (pairs.empty()) return;
+  std::cerr << "estlab: note: no row observes both outputs of " << pairs
+            << ": the likelihood does not depend on their covariance (docs/multirate.md); tune "
+               "them diagonal (--r-param diag, or diag for their sensor groups)\n";
+}
+
 bool IsDiagonal(const std::vector<double>& a, int n) {
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
@@ -786,6 +829,7 @@ int RunTune(const std::vector<std::string>& args) {
   // The initial states named, checked against the model before any work.
   ResolveInitialStates(options.estimate_x0, options.x0_per_file, datasets.size(), model.states,
                        model.name);
+  NoteNeverCoObserved(options, meas, datasets);
   if (vm.count("validate") && model.run_filter == nullptr)
     throw InputError("--validate: the filter runner is not available");
   // Open the output first so an unwritable path fails before the work.

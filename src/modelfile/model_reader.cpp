@@ -53,14 +53,15 @@ class SectionReader {
 
   void ReadSection(const IniSection& s) {
     if (s.kind == "measurement") return ReadMeasurement(s);
+    const bool known = s.kind == "invariant" || s.kind == "model" || s.kind == "states" ||
+                       s.kind == "params" || s.kind == "let" || s.kind == "rhs" || s.kind == "step";
+    if (!known)
+      return Report(s.kind_pos,
+                    "unknown section " + Quoted(s.kind) + DidYouMean(s.kind, kSectionKinds));
     if (!s.group.empty())
       return Report(s.group_pos, "only a [measurement NAME: GROUP] section takes a group");
     if (s.kind == "invariant") return ReadInvariantGroup(s);
-    if (s.kind == "model" || s.kind == "states" || s.kind == "params" || s.kind == "let" ||
-        s.kind == "rhs" || s.kind == "step") {
-      return ReadSingleton(s);
-    }
-    Report(s.kind_pos, "unknown section " + Quoted(s.kind) + DidYouMean(s.kind, kSectionKinds));
+    ReadSingleton(s);
   }
 
   // A section that appears once; a repeated one is reported and read on.

@@ -214,13 +214,13 @@ void ReadR(const Reader& r, const std::string& np, const MeasurementDesc& meas, 
     for (const std::string& t : *list) grouped = grouped || t.find('=') != std::string::npos;
   const int m = int(meas.outputs.size());
   if (!grouped) {
-    if (diags.size() + mats.size() != 1) {
-      throw KeyError(diags.size() > 1  ? rd
-                     : mats.size() > 1 ? rm
-                                       : rd,
-                     diags.size() + mats.size() == 0
-                         ? "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)"
-                         : "give R once (or once per sensor group, GROUP=values)");
+    if (diags.empty() == mats.empty())  // neither, or both
+      throw KeyError(rd, "give exactly one of --" + rd + ", --" + rm + " (measurement noise R)");
+    if (diags.size() + mats.size() > 1) {
+      throw KeyError(diags.empty() ? rm : rd,
+                     meas.groups.empty() ? "is given more than once"
+                                         : "is given more than once (once per sensor group "
+                                           "takes GROUP=values)");
     }
     spec->r = r.DiagOrMatrix(rd, rm, m, "one per output of '" + meas.name + "'");
     const std::string key = r.Given(rd) ? rd : rm;
@@ -238,7 +238,9 @@ void ReadR(const Reader& r, const std::string& np, const MeasurementDesc& meas, 
     }
   }
   for (size_t i = 0; i < seen.size(); ++i)
-    if (!seen[i]) throw KeyError(rd, "no R for sensor group '" + meas.groups[i].name + "'");
+    if (!seen[i])
+      throw KeyError(diags.empty() ? rm : rd,
+                     "no R for sensor group '" + meas.groups[i].name + "'");
 }
 
 void ReadNoise(const Reader& r, const std::string& np, int n, const MeasurementDesc& meas,

@@ -31,7 +31,7 @@ int Period(const std::string& value, bool rate, double dt, const std::string& ke
     throw InputError(key + ": a rate needs rows on a uniform grid (--dt); use the every-k form");
   const double rows = 1.0 / (hz * dt);
   const double k = std::round(rows);
-  if (k < 1 || std::abs(rows - k) > 1e-6 * rows) {
+  if (k < 1 || k > 1e9 || std::abs(rows - k) > 1e-6 * rows) {
     throw InputError(key + ": " + group + " at " + FormatNumber(hz) + " Hz is " +
                      FormatNumber(rows) + " rows of " + FormatNumber(dt) +
                      " s: give a rate that is a whole number of rows");

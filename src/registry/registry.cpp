@@ -147,27 +147,39 @@ std::string GroupNames(const MeasurementDesc& m) {
 }  // namespace
 
 const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) const {
+  const std::string want = Trim(meas);
   std::vector<std::string> names, groups;
   for (const auto& m : measurements) {
-    if (m.name == meas) return m;
+    if (m.name == want) return m;
     names.push_back(m.name);
     for (const OutputGroup& g : m.groups) groups.push_back(g.name);
   }
   const std::string known =
       " (known: " + Join(names) + (groups.empty() ? "" : "; sensor groups: " + Join(groups)) + ")";
+  if (groups.empty() || want.find(',') == std::string::npos) {
+    bool group = false;  // one group's name alone
+    for (const std::string& g : groups) group = group || g == want;
+    if (!group)
+      throw InputError("unknown measurement '" + want + "' for model '" + name + "'" + known);
+  }
   // A list of sensor groups: all of one measurement's, each once.
   const MeasurementDesc* found = nullptr;
   std::vector<std::string> given;
-  for (const std::string& g : SplitTrimmed(meas, ',')) {
+  for (const std::string& g : SplitTrimmed(want, ',')) {
     const MeasurementDesc* owner = nullptr;
-    for (const auto& m : measurements)
+    for (const auto& m : measurements) {
+      if (m.name == g)
+        throw InputError("'" + g + "' in '" + want +
+                         "' is a measurement, not a sensor group: give one measurement, or "
+                         "sensor groups of one");
       if (m.FindGroup(g) != nullptr) owner = &m;
+    }
     if (owner == nullptr)
-      throw InputError("unknown measurement or sensor group '" + g + "' for model '" + name + "'" +
-                       known);
+      throw InputError("unknown sensor group '" + g + "' in '" + want + "' for model '" + name +
+                       "'" + known);
     for (const std::string& earlier : given)
       if (earlier == g)
-        throw InputError("sensor group '" + g + "' is named twice in '" + meas + "'");
+        throw InputError("sensor group '" + g + "' is named twice in '" + want + "'");
     if (found != nullptr && found != owner)
       throw InputError("sensor groups '" + given.front() + "' and '" + g +
                        "' belong to different measurements ('" + found->name + "', '" +
@@ -175,10 +187,8 @@ const MeasurementDesc& ModelEntry::FindMeasurement(const std::string& meas) cons
     found = owner;
     given.push_back(g);
   }
-  if (found == nullptr)
-    throw InputError("unknown measurement '" + meas + "' for model '" + name + "'" + known);
   if (given.size() != found->groups.size())
-    throw InputError("'" + meas + "' names " + std::to_string(given.size()) + " of the " +
+    throw InputError("'" + want + "' names " + std::to_string(given.size()) + " of the " +
                      std::to_string(found->groups.size()) + " sensor groups of measurement '" +
                      found->name + "' (" + GroupNames(*found) +
                      "): name them all, or the measurement");

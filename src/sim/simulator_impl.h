@@ -13,6 +13,7 @@
 #define ESTLAB_SIM_SIMULATOR_IMPL_H_
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -90,6 +91,11 @@ SimulationResult Simulate(const SimulationSpec& spec) {
                                  const typename Model::Params&) = nullptr;
   VisitMeasurement<Model>(spec.measurement, [&](auto m) {
     using Meas = decltype(m);
+    if (!spec.output_every.empty() &&
+        (spec.output_every.size() != size_t(Meas::kDim) ||
+         *std::min_element(spec.output_every.begin(), spec.output_every.end()) < 1))
+      throw InputError("sensor rates: one period >= 1 row per output of '" +
+                       std::string(Meas::kName) + "'");
     for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("z_") + o);
     if (spec.noise_free_outputs)
       for (const char* o : Meas::kOutputs) result.columns.push_back(std::string("y_") + o);

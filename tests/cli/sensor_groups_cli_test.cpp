@@ -103,7 +103,7 @@ TEST_F(SensorGroupsCli, BadGroupInputIsRefusedNamingIt) {
   ExpectRefused(base + "--measure position,position --r-diag 1e-4,1e-4",
                 "sensor group 'position' is named twice in 'position,position'");
   ExpectRefused(base + "--measure position,gyro --r-diag 1e-4,1e-4",
-                "unknown measurement or sensor group 'gyro' for model 'cart-pole'");
+                "unknown sensor group 'gyro' in 'position,gyro' for model 'cart-pole'");
   ExpectRefused(base + "--measure position,encoder --r-diag gyro=1e-4 --r-diag position=1",
                 "--r-diag: unknown sensor group 'gyro' (groups of x-theta: position, encoder)");
   ExpectRefused(base + "--measure position,encoder --r-diag encoder=1e-4 --r encoder=1",
@@ -150,6 +150,35 @@ TEST_F(SensorGroupsCli, BadGroupInputIsRefusedNamingIt) {
       "--q-param fixed --measure position,encoder --init-r-diag 1e-4,1e-4 --r-param "
       "position=scalar,position=full --data mr.csv --input 0 --out t.ini",
       "--r-param: sensor group 'position' is given twice", "t.ini");
+}
+
+// A row per sensor: no row has both the position and the angle, so a full
+// R's covariance of the two is not in the likelihood; the tuner says so
+// before the fit (and not for the multi-rate file, whose rows at t = 0, 1, ...
+// have both).
+TEST_F(SensorGroupsCli, TunerNotesAFullRCovarianceNoRowObserves) {
+  std::string split;
+  const std::vector<std::string> lines = SplitLines(ReadFile(dir_.File("mr.csv")));
+  split += lines[0] + "\n";
+  for (size_t k = 1; k < lines.size(); ++k) {
+    const size_t last = lines[k].rfind(',');
+    const size_t before = lines[k].rfind(',', last - 1);
+    const std::string head = lines[k].substr(0, before);      // t and the states
+    split += head + ",," + lines[k].substr(last + 1) + "\n";  // the angle alone
+    if (last > before + 1)  // and the position alone, at the same time
+      split += head + "," + lines[k].substr(before + 1, last - before - 1) + ",\n";
+  }
+  WriteText(dir_.File("split.csv"), split);
+  const std::string tune =
+      "tune --model cart-pole --x0 theta=3 --p0-diag 1e-4,1e-4,1e-4,1e-4 --filter ekf "
+      "--init-q-diag 1e-10,1e-10,1e-10,1e-10 --q-param fixed --measure x-theta "
+      "--init-r '1e-4,0;0,1e-4' --r-param full --input 0 --max-iterations 1 --data ";
+  const auto r = RunEstlab(tune + "split.csv", dir_.path());
+  EXPECT_NE(r.err.find("estlab: note: no row observes both outputs of R(x,theta)"),
+            std::string::npos)
+      << r.err;
+  const auto both = RunEstlab(tune + "mr.csv", dir_.path());
+  EXPECT_EQ(both.err.find("no row observes"), std::string::npos) << both.err;
 }
 
 }  // namespace

@@ -169,8 +169,23 @@ TEST(SensorGroups, MeasureNamesTheMeasurementWithThoseGroups) {
             std::string::npos);
   EXPECT_NE(ErrorOf([&] {
               model.FindMeasurement("gyro,encoder");
-            }).find("unknown measurement or sensor group 'gyro'"),
+            }).find("unknown sensor group 'gyro' in 'gyro,encoder' for model 'cart-pole'"),
             std::string::npos);
+  EXPECT_EQ(model.FindMeasurement("x-theta ").name, "x-theta");
+  EXPECT_NE(ErrorOf([&] {
+              model.FindMeasurement("x-theta,position");
+            }).find("'x-theta' in 'x-theta,position' is a measurement, not a sensor group"),
+            std::string::npos);
+  // A plain unknown name keeps its message, here and for a model without groups.
+  EXPECT_EQ(ErrorOf([&] { model.FindMeasurement("angles"); })
+                .rfind("unknown measurement 'angles' for model 'cart-pole' (known: x-theta; "
+                       "sensor groups: position, encoder)",
+                       0),
+            0u);
+  EXPECT_EQ(ErrorOf([&] {
+              FindModel("pendulum").FindMeasurement("cos");
+            }).rfind("unknown measurement 'cos' for model 'pendulum' (known: ", 0),
+            0u);
 }
 
 FilterSettings CartPoleSettings() {
@@ -207,7 +222,8 @@ TEST(SensorGroups, RPerGroupFillsItsBlock) {
   EXPECT_NE(error({{"r-diag", "position=1,2"}, {"r-diag", "encoder=1"}})
                 .find("one per output of group 'position'"),
             std::string::npos);
-  EXPECT_NE(error({{"r-diag", "position=-1"}, {"r-diag", "encoder=1"}}).find("--r-diag"),
+  EXPECT_NE(error({{"r-diag", "position=-1"}, {"r-diag", "encoder=1"}})
+                .find("--r-diag: R of group 'position' is not positive definite"),
             std::string::npos);
   // The whole form still works, and twice is refused.
   EXPECT_EQ(BuildFilterSpec(
@@ -219,7 +235,15 @@ TEST(SensorGroups, RPerGroupFillsItsBlock) {
                 model)
                 .r,
             (std::vector<double>{0.5, 0.0, 0.0, 0.25}));
-  EXPECT_NE(error({{"r-diag", "1,1"}, {"r-diag", "2,2"}}).find("give R once"), std::string::npos);
+  EXPECT_NE(error({{"r-diag", "1,1"}, {"r-diag", "2,2"}})
+                .find("--r-diag: is given more than once (once per sensor group takes "
+                      "GROUP=values)"),
+            std::string::npos);
+  EXPECT_NE(error({{"r-diag", "1,1"}, {"r", "2,0;0,2"}})
+                .find("--r-diag: give exactly one of --r-diag, --r (measurement noise R)"),
+            std::string::npos);
+  EXPECT_NE(error({{"r", "encoder=1"}}).find("--r: no R for sensor group 'position'"),
+            std::string::npos);
 }
 
 TEST(SensorGroups, BlockwiseCovarianceEqualsTheHandBlockDiagonalMatrix) {
@@ -242,6 +266,39 @@ TEST(SensorGroups, BlockwiseCovarianceEqualsTheHandBlockDiagonalMatrix) {
   hand.block<2, 2>(0, 0) = L * L.transpose();
   hand(2, 2) = std::exp(0.7);
   EXPECT_LT((r.Matrix<double>(theta.data(), 0.0) - hand).cwiseAbs().maxCoeff(), 1e-15);
+  // A full block after another: its off-diagonal parameter names its
+  // absolute row.
+  Mat<3, 3> bd = kR;
+  bd(0, 1) = bd(1, 0) = 0.0;
+  bd(1, 2) = bd(2, 1) = 0.003;
+  initial.matrix = bd;
+  const CovarianceParam<3> second(NoiseParam::kDiag, "r", names, {}, initial, 0.0,
+                                  {{NoiseParam::kDiag, 0, 1, "a"}, {NoiseParam::kFull, 1, 2, "b"}});
+  ASSERT_EQ(second.NumParams(), 4);
+  EXPECT_EQ(second.Names()[2], "Lr(pos,speed)");
+  EXPECT_EQ(second.OffDiagonalRow(), (std::vector<int>{-1, -1, 2, -1}));
+  EXPECT_LT((second.Matrix<double>(second.InitialTheta().data(), 0.0) - bd).cwiseAbs().maxCoeff(),
+            1e-15);
+  // One group of a kind is that kind over the whole matrix, as without groups.
+  initial.matrix = kR;
+  for (const NoiseParam kind : {NoiseParam::kFull, NoiseParam::kScalar}) {
+    const CovarianceParam<3> one(NoiseParam::kDiag, "r", names, {}, initial, 0.0,
+                                 {{kind, 0, 3, "nav"}});
+    const CovarianceParam<3> whole(kind, "r", names, {}, initial, 0.0);
+    EXPECT_EQ(one.kind(), kind);
+    EXPECT_FALSE(one.Blockwise());
+    EXPECT_EQ(one.Names(), whole.Names());
+    EXPECT_EQ(one.InitialTheta(), whole.InitialTheta());
+  }
+  // Every group fixed: the initial R with 0 between the groups.
+  const CovarianceParam<3> fixed(
+      NoiseParam::kDiag, "r", names, {}, initial, 0.0,
+      {{NoiseParam::kFixed, 0, 1, "a"}, {NoiseParam::kFixed, 1, 2, "b"}});
+  EXPECT_EQ(fixed.kind(), NoiseParam::kFixed);
+  EXPECT_EQ(fixed.NumParams(), 0);
+  Mat<3, 3> cut = kR;
+  cut(0, 1) = cut(1, 0) = 0.0;
+  EXPECT_EQ(fixed.Matrix<double>(nullptr, 0.0), cut);
   // Diag blocks throughout are diag over the whole matrix (EM and ALS take it).
   const CovarianceParam<3> d(NoiseParam::kFull, "r", names, {}, initial, 0.0,
                              {{NoiseParam::kDiag, 0, 2, "imu"}, {NoiseParam::kDiag, 2, 1, "gps"}});
@@ -391,6 +448,14 @@ TEST(SensorGroups, SimulatedRatesEmptyTheCellsOfTheFullRateData) {
     }
   }
   EXPECT_EQ(kept, 4);  // t = 0, 1, 2, 3
+  // A period per output, each at least one row.
+  for (const std::vector<int>& bad : {std::vector<int>{0, 1}, std::vector<int>{100}}) {
+    spec.output_every = bad;
+    EXPECT_NE(ErrorOf([&] {
+                model.simulate(spec);
+              }).find("sensor rates: one period >= 1 row per output of 'x-theta'"),
+              std::string::npos);
+  }
 }
 
 }  // namespace
