@@ -489,10 +489,12 @@ void RegisterAll() {
       ->Unit(us);
   // One of the two angles missing in every other step (a slower sensor's gap):
   // the subset update on the full-size matrices (src/filters/missing.h).
-  RegisterBenchmark("KF/double-pendulum/n4m2/rk4/theta2-every-other-step", KfGap_<DP, DP::Angles>, 1);
-  RegisterBenchmark("EKF/double-pendulum/n4m2/rk4/theta2-every-other-step", EkfGap_<DP, DP::Angles>, rk4, 1);
-  RegisterBenchmark("UKF/double-pendulum/n4m2/rk4/theta2-every-other-step", SigmaGap_<DP, DP::Angles>, rk4,
-                    SigmaRule::kUnscented, 1);
+  RegisterBenchmark("KF/double-pendulum/n4m2/rk4/theta2-every-other-step", KfGap_<DP, DP::Angles>,
+                    1);
+  RegisterBenchmark("EKF/double-pendulum/n4m2/rk4/theta2-every-other-step", EkfGap_<DP, DP::Angles>,
+                    rk4, 1);
+  RegisterBenchmark("UKF/double-pendulum/n4m2/rk4/theta2-every-other-step",
+                    SigmaGap_<DP, DP::Angles>, rk4, SigmaRule::kUnscented, 1);
   RegisterBenchmark("PF/double-pendulum/n4m2/rk4/systematic-every-step/theta2-every-other-step",
                     PfGap_<DP, DP::Angles>, 1)
       ->Arg(1000)
