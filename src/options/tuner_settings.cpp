@@ -18,10 +18,11 @@ bool Box(const EstimatorInfo& e) { return e.tuner || e.params; }
 
 const std::vector<TunerKey> kTunerKeys = {
     {"estimator", "ml", nullptr},  // help: EstimatorHelp
-    {"solver", "lbfgs", "ml: lbfgs (projected L-BFGS) | least-squares (Levenberg-Marquardt)",
-     IsMl, "the ml estimator"},
-    {"q-param", nullptr, "diag | full | white-accel | scalar | fixed (default: the --init-q* shape)",
-     Noise, "the estimators of Q and R"},
+    {"solver", "lbfgs", "ml: lbfgs (projected L-BFGS) | least-squares (Levenberg-Marquardt)", IsMl,
+     "the ml estimator"},
+    {"q-param", nullptr,
+     "diag | full | white-accel | scalar | fixed (default: the --init-q* shape)", Noise,
+     "the estimators of Q and R"},
     {"r-param", nullptr,
      "diag | full | scalar | fixed (default: the --init-r* shape), or one per sensor group: "
      "GROUP=KIND,... (ml; R is then block-diagonal)",
@@ -45,8 +46,7 @@ const std::vector<TunerKey> kTunerKeys = {
      "(+10^4; x5 for a stiff model), 100x in one interval; a point needing more is infeasible"},
     {"tolerance", "1e-9", "em: stop when the relative NLL change is at most this", IsEm,
      "the em estimator"},
-    {"lags", "10", "als: innovation autocovariance lags 0..N-1 fitted", IsAls,
-     "the als estimator"},
+    {"lags", "10", "als: innovation autocovariance lags 0..N-1 fitted", IsAls, "the als estimator"},
 };
 
 const TunerKey& KeyOf(const std::string& name) {
@@ -128,19 +128,19 @@ std::vector<std::pair<std::string, NoiseParam>> ParseGroupNoiseParams(const std:
 TunerOptions BuildTunerOptions(const TunerSettings& s, const std::string& q_guess,
                                const std::string& r_guess) {
   TunerOptions o;
-  o.estimator = Keyed("estimator", s.Get("estimator"),
-                      [](const std::string& t, const std::string& k) { return ParseEstimator(t, k); });
+  o.estimator =
+      Keyed("estimator", s.Get("estimator"),
+            [](const std::string& t, const std::string& k) { return ParseEstimator(t, k); });
   const EstimatorInfo& e = InfoOf(o.estimator);
   for (const auto& [name, text] : s.values()) {  // a key of another estimator is an error
     const TunerKey& key = KeyOf(name);
     if (key.applies != nullptr && !key.applies(e))
-      throw KeyError(name, std::string("applies to ") + key.applies_to + " only (the estimator is " +
-                               e.name + ")");
+      throw KeyError(name, std::string("applies to ") + key.applies_to +
+                               " only (the estimator is " + e.name + ")");
   }
   auto number = [&](const char* key) {
-    return Keyed(key, s.Get(key), [](const std::string& t, const std::string& k) {
-      return ParseNumber(t, k);
-    });
+    return Keyed(key, s.Get(key),
+                 [](const std::string& t, const std::string& k) { return ParseNumber(t, k); });
   };
   auto count = [&](const char* key, int lo, int hi) {
     return Keyed(key, s.Get(key), [&](const std::string& t, const std::string& k) {
@@ -176,8 +176,8 @@ TunerOptions BuildTunerOptions(const TunerSettings& s, const std::string& q_gues
   o.bound_width = number("bound-width");
   o.log_lower = list("log-lower");
   o.log_upper = list("log-upper");
-  o.max_iterations = s.Given("max-iterations") ? count("max-iterations", 1, 100000000)
-                                               : e.default_max_iterations;
+  o.max_iterations =
+      s.Given("max-iterations") ? count("max-iterations", 1, 100000000) : e.default_max_iterations;
   o.max_integrator_steps = count("max-integrator-steps", 1, 100000000);
   o.em_tolerance = number("tolerance");
   o.als_lags = count("lags", 1, 10000);
