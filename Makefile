@@ -6,7 +6,7 @@ CMAKE_FLAGS ?=
 
 DEB_PACKAGES := cmake g++ make git pkg-config ccache libsundials-dev libceres-dev libeigen3-dev \
                 libboost-program-options-dev libgtest-dev libbenchmark-dev gnuplot-nox \
-                libsleef-dev
+                libsleef-dev pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 ESTLAB := $(BUILD)/estlab
 # ccache keys on paths relative to the clone, so clones share cache entries.
@@ -38,7 +38,8 @@ build: configure
 	cmake --build $(BUILD) -j$(JOBS)
 
 # The binary, libraries, headers and CMake package (find_package(estlab);
-# docs/models.md) under PREFIX.
+# docs/models.md) under PREFIX; the Python module in
+# PREFIX/lib/python3/dist-packages/estlab (docs/python.md).
 PREFIX ?= /usr/local
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)
@@ -53,7 +54,7 @@ test: deps build
 ASAN_SKIP := AlsOdelson.RecoversQAndRWithinThreeMonteCarloStandardErrors|EmLinear.DiagonalQAndCorrelatedFullR|TunerVerdict.TwoHundredRandomStartsStayAdmissibleAndHonest
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Asan -DCMAKE_CXX_FLAGS_ASAN="-O1 -g1" \
-	  -DESTLAB_WERROR=ON -DESTLAB_SANITIZE=ON
+	  -DESTLAB_WERROR=ON -DESTLAB_SANITIZE=ON -DESTLAB_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j$(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir $(ASAN_BUILD) --output-on-failure -j$(JOBS) -L unit -E '$(ASAN_SKIP)'

@@ -15,11 +15,12 @@
 #   8 options    src/options      the filter key table, FilterSettings -> FilterSpec
 #   9 studies    studies          Monte Carlo studies, reports, figures
 #  10 cli        src/cli          the estlab command
+#  11 python     src/python       the Python module (import estlab)
 #
 # Run by hand: cmake -DESTLAB_SOURCE_DIR=. -P cmake/check_layers.cmake
 set(ESTLAB_LAYERS
   "src/core=0" "src/io=1" "src/modelfile=1" "models=2" "src/ode=3" "src/filters=4" "src/run=5" "src/sim=5"
-  "adaptive=6" "src/registry=7" "src/options=8" "studies=9" "src/cli=10")
+  "adaptive=6" "src/registry=7" "src/options=8" "studies=9" "src/cli=10" "src/python=11")
 
 function(estlab_layer_of path out_rank out_folder)
   set(rank -1)

@@ -325,118 +325,213 @@ std::string SummaryJsonWithTruth(const FilterSummary& s, const TruthChoice& trut
 namespace {
 
 // `estlab filter` and `estlab smooth`: the same options and checks; smooth
-// adds --smoother-trajectories and writes the smoothed rows.
-int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
-  po::options_description desc(
-      smooth ? "estlab smooth: run a filter forward, then its smoother backward (RTS for the "
-               "Gaussian filters, backward simulation for the particle filter)"
-             : "estlab filter: run a Kalman-family or particle filter over a data file");
-  desc.add_options()("help,h", "this text")(
-      "data", po::value<std::string>(),
-      "data CSV: t, z_<output> (an empty cell is a missing component: the row updates with the "
-      "others), the inputs")(
-      "out", po::value<std::string>(),
-      "per-step output CSV (optional: without it only the summary; never an input file)")(
-      "json", "print a JSON summary")(
-      "plot", po::value<std::string>(),
-      "draw the run into folder DIR: PNG + SVG, their gnuplot scripts and data")(
-      "allow-degenerate", "pf: exit 0 even when the particle filter degenerates");
-  AddTruthOptions(&desc);
-  if (smooth)
-    desc.add_options()("smoother-trajectories", po::value<int>()->default_value(100),
-                       "pf: backward-simulated trajectories of the particle smoother (2..100000; "
-                       "memory: M x rows x states x 8 bytes)");
-  AddFilterOptions(&desc);
-  AddConfigOption(&desc);
+// adds --smoother-trajectories and writes the smoothed rows. Built once.
+const po::options_description& FilterDescription(bool smooth) {
+  static const auto make = [](bool smooth) {
+    po::options_description desc(
+        smooth ? "estlab smooth: run a filter forward, then its smoother backward (RTS for the "
+                 "Gaussian filters, backward simulation for the particle filter)"
+               : "estlab filter: run a Kalman-family or particle filter over a data file");
+    desc.add_options()("help,h", "this text")(
+        "data", po::value<std::string>(),
+        "data CSV: t, z_<output> (an empty cell is a missing component: the row updates with "
+        "the others), the inputs")(
+        "out", po::value<std::string>(),
+        "per-step output CSV (optional: without it only the summary; never an input file)")(
+        "json", "print a JSON summary")(
+        "plot", po::value<std::string>(),
+        "draw the run into folder DIR: PNG + SVG, their gnuplot scripts and data")(
+        "allow-degenerate", "pf: exit 0 even when the particle filter degenerates");
+    AddTruthOptions(&desc);
+    if (smooth)
+      desc.add_options()("smoother-trajectories", po::value<int>()->default_value(100),
+                         "pf: backward-simulated trajectories of the particle smoother "
+                         "(2..100000; memory: M x rows x states x 8 bytes)");
+    AddFilterOptions(&desc);
+    AddConfigOption(&desc);
+    return desc;
+  };
+  static const po::options_description filter = make(false), smoother = make(true);
+  return smooth ? smoother : filter;
+}
+
+po::variables_map ParseFilterArgs(const std::vector<std::string>& args, bool smooth) {
   po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  po::store(po::command_line_parser(args).options(FilterDescription(smooth)).run(), vm);
   MergeConfigFiles(&vm);
   po::notify(vm);
+  return vm;
+}
+
+// One filter or smoother run, checked and loaded.
+struct FilterJob {
+  const ModelEntry* model = nullptr;
+  const MeasurementDesc* meas = nullptr;
+  FilterSpec spec;
+  TruthChoice truth;
+  std::string data_path;
+  FilterData data;
+};
+
+// --smoother-trajectories and the particle smoother's Q.
+void CheckSmootherOptions(const FilterRequest& r, const ModelEntry& model, FilterSpec* spec) {
+  spec->smooth = true;
+  spec->smoother_trajectories = r.smoother_trajectories;
+  if (spec->smoother_trajectories < 2 || spec->smoother_trajectories > kMaxSmootherTrajectories)
+    throw InputError("--smoother-trajectories must be in 2.." +
+                     std::to_string(kMaxSmootherTrajectories) + ", got " +
+                     std::to_string(spec->smoother_trajectories));
+  if (r.smoother_trajectories_given && spec->kind() != FilterKind::kPf)
+    throw InputError(std::string("--smoother-trajectories applies to the particle smoother "
+                                 "(--filter pf), not ") +
+                     FilterKindName(spec->kind()));
+  // The particle smoother weighs by the transition density: a fixed Q must
+  // be positive definite (a white-noise-acceleration Q is checked per step).
+  if (spec->kind() == FilterKind::kPf && !spec->q_white_accel)
+    CheckCovariance(spec->q, int(model.states.size()),
+                    "Q (the particle smoother needs a positive definite process noise)", false);
+}
+
+// The particle smoother's trajectories, checked before they exist.
+void CheckSmootherMemory(const FilterJob& job) {
+  const double bytes = double(job.spec.smoother_trajectories) * double(job.data.t.size()) *
+                       double(job.model->states.size()) * 8.0;
+  if (bytes > kMaxSmootherBytes)
+    throw InputError("--smoother-trajectories " + std::to_string(job.spec.smoother_trajectories) +
+                     " over " + std::to_string(job.data.t.size()) + " rows of " + job.data_path +
+                     " would take " + FormatNumber(bytes / 1073741824.0) + " GiB (at most " +
+                     FormatNumber(kMaxSmootherBytes / 1073741824.0) +
+                     "): fewer trajectories, or a shorter record");
+}
+
+// Every check of the options and the data (throws InputError), then the data.
+FilterJob PrepareFilter(const FilterRequest& r) {
+  if (r.model.empty()) throw InputError("--model is required (see 'estlab list')");
+  if (r.data.empty()) throw InputError("--data is required");
+  FilterJob job;
+  job.model = &FindModel(r.model);
+  const ModelEntry& model = *job.model;
+  job.spec = BuildFilterSpec(r.settings, model);
+  if (r.smooth) CheckSmootherOptions(r, model, &job.spec);
+  job.data_path = r.data;
+  job.truth = ResolveTruth(r.truth, r.no_truth, job.data_path, model);
+  job.meas = &model.FindMeasurement(job.spec.measurement);
+  job.data =
+      LoadFilterData(job.data_path, model, *job.meas, ParseColumnMaps(r.settings.GetAll("column")),
+                     job.truth.read, r.settings.Given("input"));
+  CheckPriorTime(job.spec, job.data);
+  if (r.smooth && job.spec.kind() == FilterKind::kPf) CheckSmootherMemory(job);
+  return job;
+}
+
+// The request that the parsed options make.
+FilterRequest RequestFromOptions(const po::variables_map& vm, bool smooth) {
+  FilterRequest r;
+  auto text = [&](const char* key) { return vm.count(key) ? vm[key].as<std::string>() : ""; };
+  r.model = text("model");
+  r.settings = SettingsFromVariablesMap(vm);
+  r.data = text("data");
+  if (vm.count("truth")) r.truth = vm["truth"].as<std::string>();
+  r.no_truth = vm.count("no-truth") > 0;
+  r.smooth = smooth;
+  if (smooth) {
+    r.smoother_trajectories = vm["smoother-trajectories"].as<int>();
+    r.smoother_trajectories_given = !vm["smoother-trajectories"].defaulted();
+  }
+  r.allow_degenerate = vm.count("allow-degenerate") > 0;
+  return r;
+}
+
+// The exit status of a finished run: 1 for a numerical failure, or a
+// degenerate particle filter without --allow-degenerate (*error says why;
+// *warning when it is allowed).
+int FilterStatus(const FilterSummary& s, bool allow_degenerate, std::string* error,
+                 std::string* warning) {
+  if (!s.ok) {
+    *error = s.message;
+    return 1;
+  }
+  if (s.degenerate) {  // a smoother's summary carries its forward filter's
+    if (!allow_degenerate) {
+      *error = s.message + " (--allow-degenerate: exit 0)";
+      return 1;
+    }
+    *warning = s.message;
+  }
+  return 0;
+}
+
+int RunFilterOrSmooth(const std::vector<std::string>& args, bool smooth) {
+  const po::variables_map vm = ParseFilterArgs(args, smooth);
   if (vm.count("help")) {
-    std::cout << desc << "\n" << (smooth ? kSmoothExamples : kExamples);
+    std::cout << FilterDescription(smooth) << "\n" << (smooth ? kSmoothExamples : kExamples);
     return 0;
   }
-  if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
-  if (!vm.count("data")) throw InputError("--data is required");
-  if (vm.count("out"))
+  if (vm.count("out") && vm.count("model") && vm.count("data"))
     RefuseOutputOverInput("--out", vm["out"].as<std::string>(), InputFiles(vm, {"data", "config"}));
-  if (vm.count("plot")) CheckFigureFolder(vm["plot"].as<std::string>());
-  const ModelEntry& model = FindModel(vm["model"].as<std::string>());
-  FilterSpec spec = BuildFilterSpec(vm, model);
-  if (smooth) {
-    spec.smooth = true;
-    spec.smoother_trajectories = vm["smoother-trajectories"].as<int>();
-    if (spec.smoother_trajectories < 2 || spec.smoother_trajectories > kMaxSmootherTrajectories)
-      throw InputError("--smoother-trajectories must be in 2.." +
-                       std::to_string(kMaxSmootherTrajectories) + ", got " +
-                       std::to_string(spec.smoother_trajectories));
-    if (!vm["smoother-trajectories"].defaulted() && spec.kind() != FilterKind::kPf)
-      throw InputError(std::string("--smoother-trajectories applies to the particle smoother "
-                                   "(--filter pf), not ") +
-                       FilterKindName(spec.kind()));
-    // The particle smoother weighs by the transition density: a fixed Q must
-    // be positive definite (a white-noise-acceleration Q is checked per step).
-    if (spec.kind() == FilterKind::kPf && !spec.q_white_accel)
-      CheckCovariance(spec.q, int(model.states.size()),
-                      "Q (the particle smoother needs a positive definite process noise)", false);
-  }
-  const std::string data_path = vm["data"].as<std::string>();
-  const TruthChoice truth = ResolveTruth(vm, data_path, model);
-  const MeasurementDesc& meas = model.FindMeasurement(spec.measurement);
-  const FilterData data = LoadFilterData(data_path, model, meas, ParseColumnRenames(vm), truth.read,
-                                         ConstantInputGiven(vm));
-  CheckPriorTime(spec, data);
-  if (smooth && spec.kind() == FilterKind::kPf) {  // the trajectories, before they exist
-    const double bytes = double(spec.smoother_trajectories) * double(data.t.size()) *
-                         double(model.states.size()) * 8.0;
-    if (bytes > kMaxSmootherBytes)
-      throw InputError("--smoother-trajectories " + std::to_string(spec.smoother_trajectories) +
-                       " over " + std::to_string(data.t.size()) + " rows of " + data_path +
-                       " would take " + FormatNumber(bytes / 1073741824.0) + " GiB (at most " +
-                       FormatNumber(kMaxSmootherBytes / 1073741824.0) +
-                       "): fewer trajectories, or a shorter record");
-  }
+  if (vm.count("plot") && vm.count("model") && vm.count("data"))
+    CheckFigureFolder(vm["plot"].as<std::string>());
+  const FilterJob job = PrepareFilter(RequestFromOptions(vm, smooth));
   // Open the output first so an unwritable path fails before the work.
   const std::string out_path = vm.count("out") ? vm["out"].as<std::string>() : "";
   std::optional<OutputFile> out;
   if (!out_path.empty()) out.emplace(out_path);
-  const FilterRunOutput result = model.run_filter(spec, data);
+  const FilterRunOutput result = job.model->run_filter(job.spec, job.data);
   if (out) {
     WriteCsv(out->stream(), result.columns, result.rows);
     out->Commit();
   }
   if (vm.count("json")) {
-    std::cout << SummaryJsonWithTruth(result.summary, truth, data.has_truth) << "\n";
+    std::cout << SummaryJsonWithTruth(result.summary, job.truth, job.data.has_truth) << "\n";
   } else {
-    PrintSummary(result.summary, spec.adapt, truth.Describe(data.has_truth), out_path);
+    PrintSummary(result.summary, job.spec.adapt, job.truth.Describe(job.data.has_truth), out_path);
   }
   int status = 0;
   if (vm.count("plot")) {
     const PlotRequest plot{.dir = vm["plot"].as<std::string>(),
                            .what = result.summary.filter + " on " +
-                                   std::filesystem::path(data_path).filename().string(),
+                                   std::filesystem::path(job.data_path).filename().string(),
                            .json = vm.count("json") > 0};
-    if (!PlotRun(model, meas, data, result, plot)) status = 1;
+    if (!PlotRun(*job.model, *job.meas, job.data, result, plot)) status = 1;
   }
-  const FilterSummary& s = result.summary;
-  if (!s.ok) {
-    std::cerr << "estlab: error: " << s.message << "\n";
-    if (out)
+  std::string error, warning;
+  if (FilterStatus(result.summary, vm.count("allow-degenerate") > 0, &error, &warning) != 0) {
+    std::cerr << "estlab: error: " << error << "\n";
+    if (out && !result.summary.ok)
       std::cerr << "estlab: the " << result.rows.size() << " rows computed before are in "
                 << out_path << "\n";
     return 1;
   }
-  if (s.degenerate) {  // a smoother's summary carries its forward filter's
-    if (!vm.count("allow-degenerate")) {
-      std::cerr << "estlab: error: " << s.message << " (--allow-degenerate: exit 0)\n";
-      return 1;
-    }
-    std::cerr << "estlab: warning: " << s.message << "\n";
-  }
+  if (!warning.empty()) std::cerr << "estlab: warning: " << warning << "\n";
   return status;
 }
 
 }  // namespace
+
+const po::options_description& CommandOptions(const std::string& command) {
+  if (command == "filter" || command == "smooth") return FilterDescription(command == "smooth");
+  if (command == "simulate") return SimulateDescription();
+  if (command == "tune") return TuneDescription();
+  throw InputError("no options of command '" + command + "'");
+}
+
+FilterRequest FilterRequestFromArgs(const std::vector<std::string>& args, bool smooth) {
+  return RequestFromOptions(ParseFilterArgs(args, smooth), smooth);
+}
+
+FilterOutcome ComputeFilter(const FilterRequest& request) {
+  const FilterJob job = PrepareFilter(request);
+  FilterOutcome o;
+  o.run = job.model->run_filter(job.spec, job.data);
+  o.truth = job.truth;
+  o.has_truth = job.data.has_truth;
+  o.status = FilterStatus(o.run.summary, request.allow_degenerate, &o.error, &o.warning);
+  return o;
+}
+
+std::string FilterOutcome::SummaryJson() const {
+  return SummaryJsonWithTruth(run.summary, truth, has_truth);
+}
 
 int RunFilterCommand(const std::vector<std::string>& args) {
   return RunFilterOrSmooth(args, false);

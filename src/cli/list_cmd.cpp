@@ -28,7 +28,7 @@ void ModelJson(const ModelEntry& model, JsonWriter* json) {
   const ModelEntry* m = &model;
   j.BeginObject();
   j.Key("name").Value(m->name).Key("description").Value(m->description);
-  j.Key("states").Value(m->states);
+  j.Key("states").Value(m->states).Key("state_units").Value(m->state_units);
   j.Key("angle_states").BeginArray();
   for (bool a : m->angle_states) j.Value(a);
   j.EndArray();
@@ -53,6 +53,7 @@ void ModelJson(const ModelEntry& model, JsonWriter* json) {
   }
   j.EndArray();
   j.Key("has_input").Value(m->has_input()).Key("inputs").Value(m->inputs);
+  j.Key("input_units").Value(m->input_units);
   j.Key("stiff").Value(m->stiff);
   j.Key("discrete_time").Value(m->discrete_time);
   j.Key("invariants").Value(m->invariants);

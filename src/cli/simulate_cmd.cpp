@@ -210,97 +210,81 @@ void UseRecordedSchedule(const po::variables_map& vm, const ModelEntry& model,
 
 }  // namespace
 
-int RunSimulate(const std::vector<std::string>& args) {
-  po::options_description desc("estlab simulate: integrate a model and write a trajectory CSV");
-  desc.add_options()("help,h", "this text")("model", po::value<std::string>(),
-                                            "model name (see 'estlab list')")(
-      "param", po::value<std::vector<std::string>>()->composing(),
-      "parameter override name=value (repeatable, or comma-separated)")(
-      "x0", po::value<std::vector<std::string>>()->composing(),
-      "initial state name=value,... (unnamed states start at 0)")(
-      "t-end", po::value<std::string>()->default_value("10"), "final time [s]")(
-      "dt", po::value<std::string>()->default_value("0.01"), "output step [s]")(
-      "integrator", po::value<std::string>()->default_value("cvodes"),
-      "cvodes | rk4 | euler | semi-implicit-euler | discrete (a discrete-time model's own map: "
-      "its default and only choice)")(
-      "method", po::value<std::string>()->default_value("default"),
-      "CVODES method: bdf | adams | default (BDF for stiff models)")(
-      "rtol", po::value<std::string>()->default_value("1e-10"), "CVODES relative tolerance")(
-      "atol", po::value<std::string>()->default_value("1e-12"), "CVODES absolute tolerance")(
-      "max-steps", po::value<long>()->default_value(500000),
-      "CVODES maximum internal steps per output step")(
-      "substeps", po::value<int>()->default_value(1),
-      "fixed-step integrators: steps per output step")(
-      "input", po::value<std::string>()->default_value("0"),
-      "the input (cart-pole force F, dipc force u): a constant, or a seeded signal sampled "
-      "at the output times and held to the next: multisine(rms=, mean=, band=f1:f2, sines=, "
-      "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...), "
-      "file(FILE[, column]) (FILE's t and u columns, held; --data replays FILE's own times); "
-      "a model with several inputs takes one each, comma-separated, in their order")(
-      "input-hold", po::value<std::string>()->default_value("zoh"),
-      "how a recorded or sampled input goes from one sample to the next: zoh (held) | linear "
-      "(the line between the samples)")("process-noise-var", po::value<std::string>(),
-                                        "per-state variances of the noise added after each step")(
-      "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
-      "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
-      "sensor-rate", po::value<std::string>(),
-      "sensor groups' rates GROUP=HZ,... (others every row; the rest empty cells)")(
-      "sensor-every", po::value<std::string>(),
-      "sensor groups measured every K-th row: GROUP=K,...")(
-      "seed", po::value<unsigned long>()->default_value(1), "random seed")(
-      "config", po::value<std::string>(),
-      "read 'param = NAME=VALUE' and 'x0 = NAME=VALUE,...' lines from a file (the tuned.ini of "
-      "'estlab tune "
-      "--estimate-param'; its Q/R lines are for 'estlab filter' and skipped); --param wins")(
-      "data", po::value<std::string>(),
-      "replay FILE: rows at its times, the model's input from its column (named as the "
-      "input, or 'u'; held as --input-hold says)")(
-      "column", po::value<std::vector<std::string>>()->composing(),
-      "with --data: map a column, ours=[a*]theirs[+-b], e.g. u=volts")(
-      "out", po::value<std::string>(), "output CSV path")("json", "print a JSON summary on stdout");
-  po::variables_map vm;
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
-  po::notify(vm);
-  if (vm.count("help")) {
-    std::cout << desc << "\n" << kExamples;
-    return 0;
-  }
-  if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
-  if (!vm.count("out")) throw InputError("--out is required");
-  const std::vector<std::string> inputs = InputFiles(vm, {"config", "data"});
-  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), inputs);
-  RefuseOutputOverInput("--out (its sidecar)", vm["out"].as<std::string>() + ".json", inputs);
-  if (vm.count("column") && !vm.count("data")) throw InputError("--column needs --data");
+namespace {
 
-  const ModelEntry& model = FindModel(vm["model"].as<std::string>());
+// The options of `estlab simulate`, built once.
+const po::options_description& SimulateDescriptionImpl() {
+  static const po::options_description desc = [] {
+    po::options_description desc("estlab simulate: integrate a model and write a trajectory CSV");
+    desc.add_options()("help,h", "this text")("model", po::value<std::string>(),
+                                              "model name (see 'estlab list')")(
+        "param", po::value<std::vector<std::string>>()->composing(),
+        "parameter override name=value (repeatable, or comma-separated)")(
+        "x0", po::value<std::vector<std::string>>()->composing(),
+        "initial state name=value,... (unnamed states start at 0)")(
+        "t-end", po::value<std::string>()->default_value("10"), "final time [s]")(
+        "dt", po::value<std::string>()->default_value("0.01"), "output step [s]")(
+        "integrator", po::value<std::string>()->default_value("cvodes"),
+        "cvodes | rk4 | euler | semi-implicit-euler | discrete (a discrete-time model's own map: "
+        "its default and only choice)")(
+        "method", po::value<std::string>()->default_value("default"),
+        "CVODES method: bdf | adams | default (BDF for stiff models)")(
+        "rtol", po::value<std::string>()->default_value("1e-10"), "CVODES relative tolerance")(
+        "atol", po::value<std::string>()->default_value("1e-12"), "CVODES absolute tolerance")(
+        "max-steps", po::value<long>()->default_value(500000),
+        "CVODES maximum internal steps per output step")(
+        "substeps", po::value<int>()->default_value(1),
+        "fixed-step integrators: steps per output step")(
+        "input", po::value<std::string>()->default_value("0"),
+        "the input (cart-pole force F, dipc force u): a constant, or a seeded signal sampled "
+        "at the output times and held to the next: multisine(rms=, mean=, band=f1:f2, sines=, "
+        "seed=), prbs(amplitude=, mean=, period=, order=, seed=), steps(u0, t1:u1, ...), "
+        "file(FILE[, column]) (FILE's t and u columns, held; --data replays FILE's own times); "
+        "a model with several inputs takes one each, comma-separated, in their order")(
+        "input-hold", po::value<std::string>()->default_value("zoh"),
+        "how a recorded or sampled input goes from one sample to the next: zoh (held) | linear "
+        "(the line between the samples)")("process-noise-var", po::value<std::string>(),
+                                          "per-state variances of the noise added after each step")(
+        "measure", po::value<std::string>(), "measurement name (adds z_<output> columns)")(
+        "meas-noise-var", po::value<std::string>(), "per-output measurement noise variances")(
+        "sensor-rate", po::value<std::string>(),
+        "sensor groups' rates GROUP=HZ,... (others every row; the rest empty cells)")(
+        "sensor-every", po::value<std::string>(),
+        "sensor groups measured every K-th row: GROUP=K,...")(
+        "seed", po::value<unsigned long>()->default_value(1), "random seed")(
+        "config", po::value<std::string>(),
+        "read 'param = NAME=VALUE' and 'x0 = NAME=VALUE,...' lines from a file (the tuned.ini of "
+        "'estlab tune "
+        "--estimate-param'; its Q/R lines are for 'estlab filter' and skipped); --param wins")(
+        "data", po::value<std::string>(),
+        "replay FILE: rows at its times, the model's input from its column (named as the "
+        "input, or 'u'; held as --input-hold says)")(
+        "column", po::value<std::vector<std::string>>()->composing(),
+        "with --data: map a column, ours=[a*]theirs[+-b], e.g. u=volts")(
+        "out", po::value<std::string>(), "output CSV path")("json",
+                                                            "print a JSON summary on stdout");
+    return desc;
+  }();
+  return desc;
+}
+
+// One simulation, checked.
+struct SimulationJob {
+  const ModelEntry* model = nullptr;
   SimulationSpec spec;
-  std::vector<std::pair<std::string, double>> x0;
-  std::vector<std::pair<std::string, double>> params =
-      vm.count("config") ? ConfigParams(vm["config"].as<std::string>(), &x0)
-                         : std::vector<std::pair<std::string, double>>{};
-  if (vm.count("param")) {  // the command line wins
-    for (const auto& p : ParseAssignments(vm["param"].as<std::vector<std::string>>(), "--param"))
-      params.push_back(p);
-  }
-  spec.params = model.ResolveParams(params);
-  if (vm.count("x0"))  // the command line wins
-    for (const auto& p : ParseAssignments(vm["x0"].as<std::vector<std::string>>(), "--x0"))
-      x0.push_back(p);
-  spec.x0 = model.ResolveState(x0, "--x0");
-  spec.t_end = ParseNumber(vm["t-end"].as<std::string>(), "--t-end");
-  spec.dt = ParseNumber(vm["dt"].as<std::string>(), "--dt");
-  if (spec.t_end < 0)
-    throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
-  if (!(spec.dt > 0)) throw InputError("--dt must be > 0, got " + vm["dt"].as<std::string>());
-  if (spec.t_end / spec.dt > 1e8) throw InputError("--t-end / --dt exceeds 1e8 output rows");
-  if (vm.count("data")) UseRecordedSchedule(vm, model, &spec);
+  std::string method;  // --method as given
+};
+
+// --integrator, --method, tolerances, substeps and --input-hold.
+void SetTransition(const po::variables_map& vm, const ModelEntry& model, SimulationJob* job) {
+  SimulationSpec& spec = job->spec;
   // A discrete-time model's own map is its default (and only) integrator.
   spec.transition.integrator = model.discrete_time && vm["integrator"].defaulted()
                                    ? Integrator::kDiscrete
                                    : ParseIntegrator(vm["integrator"].as<std::string>());
   if (const std::string e = model.CheckIntegrator(spec.transition.integrator); !e.empty())
     throw InputError("--integrator: " + e);
-  const std::string method = vm["method"].as<std::string>();
+  const std::string method = job->method = vm["method"].as<std::string>();
   if (method == "bdf")
     spec.transition.method = CvodesMethod::kBdf;
   else if (method == "adams")
@@ -318,7 +302,11 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   std::string error;
   if (!spec.transition.IsValid(&error)) throw InputError(error);
-  SetInput(vm, model, &spec);
+}
+
+// --process-noise-var, --measure with its noise and the sensors' rates.
+void SetNoiseAndSensors(const po::variables_map& vm, const ModelEntry& model, SimulationSpec* out) {
+  SimulationSpec& spec = *out;
   if (vm.count("process-noise-var")) {
     spec.process_noise_var =
         ParseList(vm["process-noise-var"].as<std::string>(), "--process-noise-var");
@@ -345,7 +333,118 @@ int RunSimulate(const std::vector<std::string>& args) {
   } else if (vm.count("meas-noise-var") || vm.count("sensor-rate") || vm.count("sensor-every")) {
     throw InputError("--meas-noise-var, --sensor-rate and --sensor-every need --measure");
   }
+}
+
+// Every check of the options (throws InputError); --data's file read.
+SimulationJob PrepareSimulation(const po::variables_map& vm) {
+  if (vm.count("column") && !vm.count("data")) throw InputError("--column needs --data");
+  SimulationJob job;
+  job.model = &FindModel(vm["model"].as<std::string>());
+  const ModelEntry& model = *job.model;
+  SimulationSpec& spec = job.spec;
+  std::vector<std::pair<std::string, double>> x0;
+  std::vector<std::pair<std::string, double>> params =
+      vm.count("config") ? ConfigParams(vm["config"].as<std::string>(), &x0)
+                         : std::vector<std::pair<std::string, double>>{};
+  if (vm.count("param")) {  // the command line wins
+    for (const auto& p : ParseAssignments(vm["param"].as<std::vector<std::string>>(), "--param"))
+      params.push_back(p);
+  }
+  spec.params = model.ResolveParams(params);
+  if (vm.count("x0"))  // the command line wins
+    for (const auto& p : ParseAssignments(vm["x0"].as<std::vector<std::string>>(), "--x0"))
+      x0.push_back(p);
+  spec.x0 = model.ResolveState(x0, "--x0");
+  spec.t_end = ParseNumber(vm["t-end"].as<std::string>(), "--t-end");
+  spec.dt = ParseNumber(vm["dt"].as<std::string>(), "--dt");
+  if (spec.t_end < 0)
+    throw InputError("--t-end must be >= 0, got " + vm["t-end"].as<std::string>());
+  if (!(spec.dt > 0)) throw InputError("--dt must be > 0, got " + vm["dt"].as<std::string>());
+  if (spec.t_end / spec.dt > 1e8) throw InputError("--t-end / --dt exceeds 1e8 output rows");
+  if (vm.count("data")) UseRecordedSchedule(vm, model, &spec);
+  SetTransition(vm, model, &job);
+  SetInput(vm, model, &spec);
+  SetNoiseAndSensors(vm, model, &spec);
   spec.seed = vm["seed"].as<unsigned long>();
+  return job;
+}
+
+std::string MethodName(const SimulationJob& job) {
+  return job.spec.transition.method == CvodesMethod::kDefault ? (job.model->stiff ? "bdf" : "adams")
+                                                              : job.method;
+}
+
+std::string SidecarOf(const po::variables_map& vm, const SimulationJob& job) {
+  return SidecarJson(*job.model, job.spec, IntegratorName(job.spec.transition.integrator),
+                     MethodName(job), vm.count("data") ? vm["data"].as<std::string>() : "",
+                     Trim(vm["input"].as<std::string>()));
+}
+
+// The --json summary.
+std::string SimulationJson(const SimulationJob& job, const SimulationResult& result,
+                           const std::string& out_path) {
+  const ModelEntry& model = *job.model;
+  const SimulationSpec& spec = job.spec;
+  JsonWriter j;
+  j.BeginObject().Key("model").Value(model.name).Key("out").Value(out_path);
+  j.Key("integrator").Value(IntegratorName(spec.transition.integrator));
+  j.Key("steps").Value(result.steps).Key("rows").Value(long(result.rows.size()));
+  j.Key("rhs_evals").Value(result.stats.rhs_evals);
+  j.Key("jacobian_evals").Value(result.stats.jacobian_evals);
+  j.Key("internal_steps").Value(result.stats.internal_steps);
+  j.Key("wall_s").Value(result.wall_s);
+  j.Key("invariants").BeginObject();
+  for (size_t i = 0; i < result.invariant_names.size(); ++i) {
+    j.Key(result.invariant_names[i]).BeginObject();
+    j.Key("initial").Value(result.invariant_initial[i]);
+    j.Key("max_relative_drift").Value(result.invariant_drift[i]);
+    j.EndObject();
+  }
+  j.EndObject();
+  if (!result.invariant_names.empty() && result.invariant_names[0] == "energy")
+    j.Key("energy_drift").Value(result.invariant_drift[0]);
+  j.EndObject();
+  return j.str();
+}
+
+po::variables_map ParseSimulateArgs(const std::vector<std::string>& args) {
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(SimulateDescriptionImpl()).run(), vm);
+  po::notify(vm);
+  return vm;
+}
+
+}  // namespace
+
+const po::options_description& SimulateDescription() { return SimulateDescriptionImpl(); }
+
+SimulateOutcome ComputeSimulation(const std::vector<std::string>& args) {
+  const po::variables_map vm = ParseSimulateArgs(args);
+  if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
+  const SimulationJob job = PrepareSimulation(vm);
+  SimulateOutcome o;
+  o.result = job.model->simulate(job.spec);
+  o.sidecar_json = SidecarOf(vm, job);
+  o.summary_json = SimulationJson(job, o.result, "");
+  o.status = o.result.ok ? 0 : 1;
+  o.error = o.result.error;
+  return o;
+}
+
+int RunSimulate(const std::vector<std::string>& args) {
+  const po::variables_map vm = ParseSimulateArgs(args);
+  if (vm.count("help")) {
+    std::cout << SimulateDescriptionImpl() << "\n" << kExamples;
+    return 0;
+  }
+  if (!vm.count("model")) throw InputError("--model is required (see 'estlab list')");
+  if (!vm.count("out")) throw InputError("--out is required");
+  const std::vector<std::string> inputs = InputFiles(vm, {"config", "data"});
+  RefuseOutputOverInput("--out", vm["out"].as<std::string>(), inputs);
+  RefuseOutputOverInput("--out (its sidecar)", vm["out"].as<std::string>() + ".json", inputs);
+  const SimulationJob job = PrepareSimulation(vm);
+  const ModelEntry& model = *job.model;
+  const SimulationSpec& spec = job.spec;
   const std::string out_path = vm["out"].as<std::string>();
   const bool json = vm.count("json") > 0;
 
@@ -354,8 +453,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   OutputFile sidecar(out_path + ".json");
 
   const SimulationResult result = model.simulate(spec);
-  const std::string method_name =
-      spec.transition.method == CvodesMethod::kDefault ? (model.stiff ? "bdf" : "adams") : method;
+  const std::string method_name = MethodName(job);
 
   if (!result.ok) {
     OutputFile partial(PartialPath(out_path));
@@ -367,35 +465,14 @@ int RunSimulate(const std::vector<std::string>& args) {
     return 1;
   }
   WriteCsv(csv.stream(), result.columns, result.rows);
-  sidecar.stream() << SidecarJson(model, spec, IntegratorName(spec.transition.integrator),
-                                  method_name, vm.count("data") ? vm["data"].as<std::string>() : "",
-                                  Trim(vm["input"].as<std::string>()));
+  sidecar.stream() << SidecarOf(vm, job);
   csv.Finish();  // both written before either is in place: both or neither
   sidecar.Finish();
   csv.Commit();
   sidecar.Commit();
 
   if (json) {
-    JsonWriter j;
-    j.BeginObject().Key("model").Value(model.name).Key("out").Value(out_path);
-    j.Key("integrator").Value(IntegratorName(spec.transition.integrator));
-    j.Key("steps").Value(result.steps).Key("rows").Value(long(result.rows.size()));
-    j.Key("rhs_evals").Value(result.stats.rhs_evals);
-    j.Key("jacobian_evals").Value(result.stats.jacobian_evals);
-    j.Key("internal_steps").Value(result.stats.internal_steps);
-    j.Key("wall_s").Value(result.wall_s);
-    j.Key("invariants").BeginObject();
-    for (size_t i = 0; i < result.invariant_names.size(); ++i) {
-      j.Key(result.invariant_names[i]).BeginObject();
-      j.Key("initial").Value(result.invariant_initial[i]);
-      j.Key("max_relative_drift").Value(result.invariant_drift[i]);
-      j.EndObject();
-    }
-    j.EndObject();
-    if (!result.invariant_names.empty() && result.invariant_names[0] == "energy")
-      j.Key("energy_drift").Value(result.invariant_drift[0]);
-    j.EndObject();
-    std::cout << j.str() << "\n";
+    std::cout << SimulationJson(job, result, out_path) << "\n";
   } else {
     std::cout << "model            " << model.name << "\n"
               << "integrator       " << IntegratorName(spec.transition.integrator)

@@ -715,49 +715,65 @@ int TuneOutputError(const po::variables_map& vm, const ModelEntry& model, const 
 
 }  // namespace
 
+namespace {
+
+// The options of `estlab tune`, built once.
+const po::options_description& TuneDescriptionImpl() {
+  static const po::options_description desc = [] {
+    po::options_description desc("estlab tune: tune Q and R by maximum innovation likelihood");
+    desc.add_options()("help,h", "this text")("data",
+                                              po::value<std::vector<std::string>>()->composing(),
+                                              "training data CSV (repeatable)")(
+        "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
+        "init-r-scalar", po::value<std::string>(), "initial R = s I")(
+        "keep-best",
+        "write --out even when the fit is not verified converged (the best admissible point, "
+        "named as such in the file)")(
+        "estimate-param", po::value<std::string>(),
+        "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
+        "param-bounds", po::value<std::string>(),
+        "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
+        "param-prior", po::value<std::string>(),
+        "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
+        "estimate-x0", po::value<std::string>(),
+        "also estimate these initial states (NAME,NAME...; initial values from --x0): ml and em, "
+        "the filter's prior mean (its covariance stays --p0-diag); output-error, the start of "
+        "the simulation over the whole record")(
+        "x0-per-file",
+        "with --estimate-x0: each --data file its own initial state (the "
+        "parameters shared)")(
+        "plot", po::value<std::string>(),
+        "draw the tuned filter on the first --validate (else --data) file into folder DIR, with "
+        "the convergence")("horizon", po::value<std::string>()->default_value("0.5"),
+                           "s: output-error windows and the validation's free-simulation RMSE")(
+        "profile", po::value<std::string>(),
+        "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21; "
+        "N <= 1000; LO and HI inside the parameter's constraint)")(
+        "profile-out", po::value<std::string>(),
+        "prefix of the profile's CSV and figure (default profile_NAME)")(
+        "validate", po::value<std::vector<std::string>>()->composing(),
+        "validation data CSV (repeatable)")("true-q-diag", po::value<std::string>(),
+                                            "validation: true Q diagonal (else <validate>.json)")(
+        "true-r-diag", po::value<std::string>(),
+        "validation: true R diagonal (else <validate>.json)")(
+        "out", po::value<std::string>(),
+        "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
+        "json", "print a JSON summary");
+    AddTunerOptions(&desc);
+    AddFilterOptions(&desc, "init-");
+    AddTruthOptions(&desc);
+    AddConfigOption(&desc);
+    return desc;
+  }();
+  return desc;
+}
+
+}  // namespace
+
+const po::options_description& TuneDescription() { return TuneDescriptionImpl(); }
+
 int RunTune(const std::vector<std::string>& args) {
-  po::options_description desc("estlab tune: tune Q and R by maximum innovation likelihood");
-  desc.add_options()("help,h", "this text")(
-      "data", po::value<std::vector<std::string>>()->composing(), "training data CSV (repeatable)")(
-      "init-q-scalar", po::value<std::string>(), "initial Q = s I")(
-      "init-r-scalar", po::value<std::string>(), "initial R = s I")(
-      "keep-best",
-      "write --out even when the fit is not verified converged (the best admissible point, "
-      "named as such in the file)")(
-      "estimate-param", po::value<std::string>(),
-      "also estimate these model parameters (NAME,NAME...; initial values from --param)")(
-      "param-bounds", po::value<std::string>(),
-      "bounds of estimated parameters, natural scale: NAME=LO:HI[,...]")(
-      "param-prior", po::value<std::string>(),
-      "Gaussian priors of estimated parameters: NAME=normal:MEAN:SD[,...]")(
-      "estimate-x0", po::value<std::string>(),
-      "also estimate these initial states (NAME,NAME...; initial values from --x0): ml and em, "
-      "the filter's prior mean (its covariance stays --p0-diag); output-error, the start of "
-      "the simulation over the whole record")(
-      "x0-per-file",
-      "with --estimate-x0: each --data file its own initial state (the "
-      "parameters shared)")(
-      "plot", po::value<std::string>(),
-      "draw the tuned filter on the first --validate (else --data) file into folder DIR, with "
-      "the convergence")("horizon", po::value<std::string>()->default_value("0.5"),
-                         "s: output-error windows and the validation's free-simulation RMSE")(
-      "profile", po::value<std::string>(),
-      "profile likelihood of an estimated parameter: NAME[=LO:HI[:N]] (default +-4 SE, 21; "
-      "N <= 1000; LO and HI inside the parameter's constraint)")(
-      "profile-out", po::value<std::string>(),
-      "prefix of the profile's CSV and figure (default profile_NAME)")(
-      "validate", po::value<std::vector<std::string>>()->composing(),
-      "validation data CSV (repeatable)")("true-q-diag", po::value<std::string>(),
-                                          "validation: true Q diagonal (else <validate>.json)")(
-      "true-r-diag", po::value<std::string>(),
-      "validation: true R diagonal (else <validate>.json)")(
-      "out", po::value<std::string>(),
-      "write the tuned Q/R as 'estlab filter' options (tuned.ini; never an input file)")(
-      "json", "print a JSON summary");
-  AddTunerOptions(&desc);
-  AddFilterOptions(&desc, "init-");
-  AddTruthOptions(&desc);
-  AddConfigOption(&desc);
+  const po::options_description& desc = TuneDescriptionImpl();
   po::variables_map vm;
   po::store(po::command_line_parser(args).options(desc).run(), vm);
   MergeConfigFiles(&vm, "init-");

@@ -1,12 +1,12 @@
 #include "src/cli/tune_validate.h"
 
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "src/core/parse.h"
+#include "src/io/memory_files.h"
 #include "src/options/filter_flags.h"
 #include "src/options/truth_flags.h"
 #include "studies/output_error.h"
@@ -110,16 +110,13 @@ Validation ValidateOne(const po::variables_map& vm, const std::string& path,
   const int n = int(model.states.size()), m = int(meas.outputs.size());
   std::vector<double> q_diag, r_diag, params, x0;
   std::string source;
-  std::ifstream sidecar(path + ".json");
-  if (sidecar) {
-    std::stringstream text;
-    text << sidecar.rdbuf();
-    const bool has_q = JsonNumberArray(text.str(), "process_noise_var", &q_diag);
-    const bool has_r = JsonNumberArray(text.str(), "meas_noise_var", &r_diag);
+  if (const std::optional<std::string> text = ReadSidecar(path)) {
+    const bool has_q = JsonNumberArray(*text, "process_noise_var", &q_diag);
+    const bool has_r = JsonNumberArray(*text, "meas_noise_var", &r_diag);
     if (has_q && q_diag.empty()) q_diag.assign(n, 0.0);  // simulated without process noise
     if (has_q || has_r) source = path + ".json";
-    params = SidecarParams(text.str(), model);
-    if (!JsonNumberArray(text.str(), "x0", &x0) || x0.size() != size_t(n)) x0.clear();
+    params = SidecarParams(*text, model);
+    if (!JsonNumberArray(*text, "x0", &x0) || x0.size() != size_t(n)) x0.clear();
   }
   if (vm.count("true-q-diag")) {
     q_diag = ParseList(vm["true-q-diag"].as<std::string>(), "--true-q-diag");

@@ -10,6 +10,7 @@
 
 #include "src/core/parse.h"
 #include "src/core/types.h"
+#include "src/io/memory_files.h"
 
 namespace estlab {
 
@@ -122,7 +123,13 @@ CsvTable ParseCsv(const std::string& text, const std::string& path) {
   return ParseCsvStream(in, path);
 }
 
+std::shared_ptr<const CsvTable> OpenCsv(const std::string& path) {
+  if (std::shared_ptr<const CsvTable> memory = FindMemoryTable(path)) return memory;
+  return std::make_shared<const CsvTable>(ReadCsv(path));
+}
+
 CsvTable ReadCsv(const std::string& path) {
+  if (std::shared_ptr<const CsvTable> memory = FindMemoryTable(path)) return *memory;
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
   if (std::filesystem::is_directory(status))
@@ -135,6 +142,45 @@ CsvTable ReadCsv(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read data file '" + path + "'");
   return ParseCsvStream(in, path);
+}
+
+CsvTable TableFromColumns(const std::string& path, const std::vector<std::string>& names,
+                          const std::vector<std::vector<double>>& columns) {
+  CsvTable table;
+  table.path = path;
+  constexpr long kHeaderLine = 1;
+  for (size_t j = 0; j < names.size(); ++j) {
+    if (Trim(names[j]).empty())
+      throw InputError(Where(path, kHeaderLine, j, "") + ": empty column name in the header");
+    if (names[j].find_first_of(",\n\r") != std::string::npos || Trim(names[j]) != names[j])
+      throw InputError(Where(path, kHeaderLine, j, names[j]) +
+                       ": a column name without commas, line ends or outer spaces");
+    for (size_t i = 0; i < j; ++i)
+      if (names[i] == names[j])
+        throw InputError(Where(path, kHeaderLine, j, names[j]) + ": duplicate column name");
+  }
+  if (names.size() != columns.size())
+    throw InputError(path + ": " + std::to_string(names.size()) + " column names for " +
+                     std::to_string(columns.size()) + " columns");
+  const size_t rows = columns.empty() ? 0 : columns[0].size();
+  for (size_t j = 0; j < columns.size(); ++j)
+    if (columns[j].size() != rows)
+      throw InputError(path + ": column '" + names[j] + "' has " +
+                       std::to_string(columns[j].size()) + " values, column '" + names[0] + "' " +
+                       std::to_string(rows));
+  table.columns = names;
+  table.rows.assign(rows, std::vector<double>(columns.size()));
+  for (size_t i = 0; i < rows; ++i) {
+    const long line = long(i) + kHeaderLine + 1;
+    for (size_t j = 0; j < columns.size(); ++j) {
+      const double v = columns[j][i];
+      if (std::isinf(v))  // NaN is a missing value, as an empty cell
+        ParseNumber(v > 0 ? "inf" : "-inf", Where(path, line, j, names[j]));
+      table.rows[i][j] = v;
+    }
+    table.line_numbers.push_back(line);
+  }
+  return table;
 }
 
 }  // namespace estlab

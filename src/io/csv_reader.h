@@ -9,6 +9,7 @@
 #ifndef ESTLAB_IO_CSV_READER_H_
 #define ESTLAB_IO_CSV_READER_H_
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,19 @@ struct CsvTable {
   int ColumnIndex(const std::string& name) const;
 };
 
+// A table held in memory (src/io/memory_files.h) under `path` is returned
+// instead of a file's.
 CsvTable ReadCsv(const std::string& path);
+// The same, a memory table shared rather than copied.
+std::shared_ptr<const CsvTable> OpenCsv(const std::string& path);
 // Same, from text already in memory (`path` is used in messages).
 CsvTable ParseCsv(const std::string& text, const std::string& path);
+// A table from columns of values (the Python module's data), checked as a
+// file's would be, with the same messages: names non-empty and distinct,
+// every column as long as the first, values finite or NaN (missing). Row i
+// is numbered as the line of a CSV file whose header is line 1: i + 2.
+CsvTable TableFromColumns(const std::string& path, const std::vector<std::string>& names,
+                          const std::vector<std::vector<double>>& columns);
 
 }  // namespace estlab
 

@@ -316,7 +316,8 @@ void ReadTimesAndInputs(const CsvTable& table, const std::string& path, const Mo
 FilterData LoadFilterData(const std::string& path, const ModelEntry& model,
                           const MeasurementDesc& meas, const std::vector<ColumnMap>& columns,
                           bool read_truth, bool constant_input) {
-  const CsvTable table = ReadCsv(path);
+  const std::shared_ptr<const CsvTable> shared = OpenCsv(path);
+  const CsvTable& table = *shared;
   auto source = [&](const std::string& ours) { return FindSource(table, columns, ours); };
   FilterData data;
   data.path = path;
@@ -351,7 +352,8 @@ bool ConstantInputGiven(const po::variables_map& vm) {
 
 FilterData LoadInputRecord(const std::string& path, const ModelEntry& model,
                            const std::vector<ColumnMap>& columns) {
-  const CsvTable table = ReadCsv(path);
+  const std::shared_ptr<const CsvTable> shared = OpenCsv(path);
+  const CsvTable& table = *shared;
   FilterData data;
   data.path = path;
   ReadTimesAndInputs(table, path, model, columns, false, &data);

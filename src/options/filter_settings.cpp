@@ -1,8 +1,10 @@
 #include "src/options/filter_settings.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -65,8 +67,12 @@ const std::vector<FilterKey>& FilterKeyTable() {
 }
 
 const FilterKey* FindFilterKey(const std::string& key, const std::string& noise_prefix) {
+  // No string is built: every spec looks up each key's default here.
+  const bool prefixed = key.compare(0, noise_prefix.size(), noise_prefix) == 0;
+  const std::string_view rest =
+      std::string_view(key).substr(std::min(noise_prefix.size(), key.size()));
   for (const FilterKey& k : FilterKeyTable())
-    if ((k.noise ? noise_prefix + k.name : std::string(k.name)) == key) return &k;
+    if (k.noise ? prefixed && rest == k.name : key == k.name) return &k;
   return nullptr;
 }
 

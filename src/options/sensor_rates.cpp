@@ -4,6 +4,7 @@
 
 #include "src/core/parse.h"
 #include "src/core/types.h"
+#include "src/options/group_items.h"
 
 namespace estlab {
 
@@ -51,11 +52,7 @@ std::vector<int> OutputEvery(const MeasurementDesc& meas, const std::string& rat
     const std::string& text = rate ? rate_text : every_text;
     const std::string& key = rate ? rate_key : every_key;
     if (Trim(text).empty()) continue;
-    for (const std::string& item : SplitTrimmed(text, ',')) {
-      const size_t eq = item.find('=');
-      if (eq == std::string::npos || eq == 0)
-        throw InputError(key + ": expected GROUP=" + (rate ? "HZ" : "K") + ", got '" + item + "'");
-      const std::string name = Trim(item.substr(0, eq));
+    for (const auto& [name, value] : ParseGroupItems(text, key, rate ? "HZ" : "K")) {
       size_t g = 0;
       while (g < groups.size() && groups[g].name != name) ++g;
       if (g == groups.size()) {
@@ -64,7 +61,7 @@ std::vector<int> OutputEvery(const MeasurementDesc& meas, const std::string& rat
       }
       if (seen[g]) throw InputError(key + ": sensor group '" + name + "' is given twice");
       seen[g] = true;
-      const int k = Period(Trim(item.substr(eq + 1)), rate, dt, key, name);
+      const int k = Period(value, rate, dt, key, name);
       for (int j = 0; j < groups[g].count; ++j) every[size_t(groups[g].first + j)] = k;
     }
   }

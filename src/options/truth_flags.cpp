@@ -1,11 +1,11 @@
 #include "src/options/truth_flags.h"
 
 #include <algorithm>
-#include <fstream>
 #include <sstream>
 
 #include "src/core/parse.h"
 #include "src/io/csv_reader.h"
+#include "src/io/memory_files.h"
 
 namespace po = boost::program_options;
 
@@ -22,11 +22,9 @@ std::string Join(const std::vector<std::string>& names) {
 // Whether PATH.json is a simulate sidecar: an object with "estlab_version"
 // and the list of "states" the simulation wrote.
 bool SimulateSidecar(const std::string& path) {
-  std::ifstream in(path + ".json");
-  if (!in) return false;
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string s = text.str();
+  const std::optional<std::string> text = ReadSidecar(path);
+  if (!text) return false;
+  const std::string& s = *text;
   return s.find("\"estlab_version\"") != std::string::npos &&
          s.find("\"states\"") != std::string::npos;
 }
@@ -48,16 +46,23 @@ void AddTruthOptions(po::options_description* desc) {
 
 TruthChoice ResolveTruth(const po::variables_map& vm, const std::string& path,
                          const ModelEntry& model) {
+  return ResolveTruth(
+      vm.count("truth") ? std::optional<std::string>(vm["truth"].as<std::string>()) : std::nullopt,
+      vm.count("no-truth") > 0, path, model);
+}
+
+TruthChoice ResolveTruth(const std::optional<std::string>& truth, bool no_truth,
+                         const std::string& path, const ModelEntry& model) {
   TruthChoice c;
   c.names = model.states;
-  if (vm.count("no-truth")) {
-    if (vm.count("truth")) throw InputError("--truth and --no-truth contradict each other");
+  if (no_truth) {
+    if (truth) throw InputError("--truth and --no-truth contradict each other");
     c.source = "--no-truth";
     return c;
   }
-  if (vm.count("truth")) {
+  if (truth) {
     std::vector<std::string> named;
-    std::stringstream list(vm["truth"].as<std::string>());
+    std::stringstream list(*truth);
     for (std::string name; std::getline(list, name, ',');) {
       if (model.StateIndex(name) < 0)
         throw InputError("--truth: '" + name + "' is not a state of model '" + model.name +

@@ -16,6 +16,7 @@
 #define ESTLAB_OPTIONS_TRUTH_FLAGS_H_
 
 #include <boost/program_options.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,10 @@ void AddTruthOptions(boost::program_options::options_description* desc);
 // or given with --no-truth.
 TruthChoice ResolveTruth(const boost::program_options::variables_map& vm, const std::string& path,
                          const ModelEntry& model);
+// The same from the values: `truth` (--truth's list; nullopt when not
+// given) and `no_truth`.
+TruthChoice ResolveTruth(const std::optional<std::string>& truth, bool no_truth,
+                         const std::string& path, const ModelEntry& model);
 
 }  // namespace estlab::cli
 

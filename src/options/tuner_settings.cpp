@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "src/core/parse.h"
+#include "src/options/group_items.h"
 
 namespace estlab {
 
@@ -110,14 +111,8 @@ NoiseParam NoiseParamOfGuess(const std::string& guess_key) {
 std::vector<std::pair<std::string, NoiseParam>> ParseGroupNoiseParams(const std::string& text,
                                                                       const std::string& key) {
   std::vector<std::pair<std::string, NoiseParam>> out;
-  for (const std::string& item : SplitTrimmed(text, ',')) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError(key + ": expected GROUP=KIND, got '" + item + "'");
-    const std::string group = Trim(item.substr(0, eq));
-    for (const auto& [earlier, kind] : out)
-      if (earlier == group) throw InputError(key + ": sensor group '" + group + "' is given twice");
-    const NoiseParam kind = ParseNoiseParam(Trim(item.substr(eq + 1)), key);
+  for (const auto& [group, text_kind] : ParseGroupItems(text, key, "KIND")) {
+    const NoiseParam kind = ParseNoiseParam(text_kind, key);
     if (kind == NoiseParam::kWhiteAccel)
       throw InputError(key + ": white-accel applies to Q only (group '" + group + "')");
     out.push_back({group, kind});

@@ -1,6 +1,7 @@
 #include "src/registry/model_plugin.h"
 
 #include <dlfcn.h>
+#include <link.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -45,12 +46,28 @@ bool EndsWith(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// The running binary (path, size, mtime): a rebuilt estlab gets new libraries.
-std::string SelfIdentity() {
-  std::error_code ec;
+// The file that holds estlab's code: the estlab binary, or the Python
+// module (a shared library) that carries it. Empty when unknown.
+fs::path EstlabImage() {
+  Dl_info info{};
+  struct link_map* map = nullptr;
+  if (::dladdr1(reinterpret_cast<void*>(&EstlabImage), &info, reinterpret_cast<void**>(&map),
+                RTLD_DL_LINKMAP) != 0 &&
+      map != nullptr && map->l_name != nullptr && map->l_name[0] != '\0') {
+    std::error_code ec;
+    const fs::path lib = fs::canonical(map->l_name, ec);
+    return ec ? fs::path() : lib;
+  }
+  std::error_code ec;  // the main program
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path() : self;
+}
+
+// That file (path, size, mtime): a rebuilt estlab gets new libraries.
+std::string SelfIdentity() {
+  const fs::path self = EstlabImage();
   struct stat st {};
-  if (ec || ::stat(self.c_str(), &st) != 0) return "unknown-binary";
+  if (self.empty() || ::stat(self.c_str(), &st) != 0) return "unknown-binary";
   return self.string() + ":" + std::to_string(st.st_size) + ":" + std::to_string(st.st_mtime);
 }
 
@@ -62,15 +79,20 @@ std::string Quote(const std::string& s) {  // for /bin/sh
 
 // The compiler flags: the configured ones plus estlab's headers, those
 // installed beside the binary (<prefix>/bin/estlab -> <prefix>/include/estlab,
-// cmake/install.cmake) when they are there, else the source and build trees.
+// cmake/install.cmake) or the Python module
+// (<prefix>/lib/python3/dist-packages/estlab/_estlab*.so) when they are there,
+// else the source and build trees.
 const std::string& PluginFlags() {
   static const std::string flags = [] {
     std::error_code ec;
-    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    const fs::path self = EstlabImage();
+    const bool module = self.extension() == ".so";
     const fs::path installed =
-        (self.parent_path() / ESTLAB_PLUGIN_INSTALLED_INCLUDE).lexically_normal();
+        (self.parent_path() /
+         (module ? ESTLAB_PLUGIN_PYTHON_INSTALLED_INCLUDE : ESTLAB_PLUGIN_INSTALLED_INCLUDE))
+            .lexically_normal();
     const bool is_installed =
-        !ec && fs::is_regular_file(installed / "src/registry/model_entry_impl.h", ec);
+        !self.empty() && fs::is_regular_file(installed / "src/registry/model_entry_impl.h", ec);
     return std::string(ESTLAB_PLUGIN_FLAGS) + " " +
            (is_installed ? "-I" + Quote(installed.string())
                          : std::string(ESTLAB_PLUGIN_SOURCE_INCLUDES));

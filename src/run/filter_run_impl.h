@@ -407,7 +407,11 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
     ++s.steps;
     return true;
   };
-  ForEachStep<M>(spec, data, predict, row);
+  if (!ForEachStep<M>(spec, data, predict, row) && s.ok) {  // a Ctrl-C noted (interrupt.h)
+    s.ok = false;
+    s.status = "interrupted";
+    s.message = "filter " + s.filter + " interrupted before step " + std::to_string(s.steps);
+  }
 
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
   ChiSquareMeanBounds95(s.updates, nis_dof, s.nis_bounds95);

@@ -17,7 +17,9 @@
 // An input is a pointer to nu values (InputAtRow: the data's input columns,
 // else spec.input), or null for the zero input; InputFrom<Model>(u)
 // (models/model.h) makes it the model's input.
-// Either callable stops the loop by returning false.
+// Either callable stops the loop by returning false; so does a Ctrl-C
+// that a caller notes without ending the process (src/core/interrupt.h),
+// before the next row.
 //
 // Usage:
 //   const bool completed = ForEachStep<M>(
@@ -33,6 +35,7 @@
 #include <cstddef>
 #include <string>
 
+#include "src/core/interrupt.h"
 #include "src/core/types.h"
 #include "src/filters/filter_util.h"
 #include "src/run/filter_spec.h"
@@ -73,6 +76,7 @@ bool ForEachStep(const FilterSpec& spec, const FilterData& data, PredictFn&& pre
   const bool linear = spec.transition.input_hold == InputHold::kLinear;
   double t_prev = spec.has_t0 ? spec.t0 : (rows ? data.t[0] : 0.0);
   for (size_t k = 0; k < rows; ++k) {
+    if (InterruptRequested()) return false;
     const double t = data.t[k];
     if (t > t_prev) {
       const double* u0 = InputAtRow(spec, data, k > 0 ? k - 1 : 0);

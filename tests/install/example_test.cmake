@@ -54,3 +54,32 @@ if(NOT status EQUAL 2 OR NOT err MATCHES "estlab_install_probe_stop\\.h")
                       "the installed headers (exit ${status}):\n${err}")
 endif()
 message(STATUS "install test: installed estlab compiles models against ${prefix}/include/estlab: ok")
+
+# The Python module, installed (issue 36): PREFIX/lib/python3/dist-packages
+# on PYTHONPATH, as docs/python.md says; it is the installed one that loads,
+# it filters, and it too compiles model files against the installed headers.
+if(ESTLAB_PYTHON)
+  set(site ${prefix}/lib/python3/dist-packages)
+  file(WRITE ${work}/python_probe.py "
+import os, sys, estlab
+assert estlab.__file__.startswith(sys.argv[1]), estlab.__file__
+t = [0.0125 * k for k in range(40)]
+run = estlab.filter('pendulum', {'t': t, 'z_sin_theta': [0.5] * 40}, measure='sin', r_diag=0.1,
+                    q_diag=[1e-4, 1e-4])
+assert run.x.shape == (40, 2), run.x.shape
+try:
+    estlab.Model(sys.argv[2])
+except estlab.InputError as e:
+    assert 'estlab_install_probe_stop.h' in str(e), str(e)
+    print('python probe: ok')
+")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${site}
+    ESTLAB_MODEL_CACHE=${work}/probe/pycache PYTHONDONTWRITEBYTECODE=1
+    ${Python3_EXECUTABLE} ${work}/python_probe.py ${site} ${work}/probe/probe.h
+    RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT status EQUAL 0 OR NOT out MATCHES "python probe: ok")
+    message(FATAL_ERROR "install test: the installed Python module (${status}):\n${out}\n${err}")
+  endif()
+  message(STATUS "install test: the installed Python module filters and compiles models "
+                 "against ${prefix}/include/estlab: ok")
+endif()
