@@ -244,6 +244,13 @@ def _tables(data, name):
     return {name: _columns(data, name)}, [name]
 
 
+def _x0_keys(model, kwargs):
+    """kwargs['x0'] given as one number per state (in the model's order) as
+    the mapping NAME=VALUE the command line takes."""
+    if 'x0' in kwargs:
+        kwargs['x0'] = _x0_mapping(model, kwargs['x0'])
+
+
 def _x0_mapping(model, x0):
     """x0 as a sequence of numbers: one per state, in the model's order."""
     if x0 is None or type(x0) is dict or isinstance(x0, (str, _abc.Mapping)):
@@ -295,8 +302,8 @@ class Model:
 
 def models():
     """The built-in models (estlab list), as Model objects."""
-    status, out, err = _estlab.run('list', ['--json'], {})
-    return [Model(m['name'], _info=m) for m in _json.loads(out)['models']]
+    return _run_command('list', ['--json'], {}, lambda out, notes: [
+        Model(m['name'], _info=m) for m in _json.loads(out)['models']])
 
 
 class Simulation(_abc.Mapping):
@@ -356,8 +363,7 @@ def simulate(model, t=None, u=None, **kwargs):
     meas_noise= (per-output variances), sensor_rate=, seed=, integrator=,
     ... (every key of 'estlab simulate --help'). Returns a Simulation.
     """
-    if 'x0' in kwargs:
-        kwargs['x0'] = _x0_mapping(model, kwargs['x0'])
+    _x0_keys(model, kwargs)
     args = ['--model', _model_arg(model)]
     tables = {}
     if t is not None:
@@ -514,13 +520,11 @@ class FilterResult:
             self.summary.get('smoother', self.summary.get('filter')), len(self), self.status)
 
 
-_filter_key_cache = []
-
-
 def _filter_keys():
-    if not _filter_key_cache:
-        _filter_key_cache.append(dict(_estlab.filter_keys()))
-    return _filter_key_cache[0]
+    """The filter key table: key -> 'flag' | 'repeatable' | 'value'."""
+    if 'filter keys' not in _option_cache:
+        _option_cache['filter keys'] = dict(_estlab.filter_keys())
+    return _option_cache['filter keys']
 
 
 _OWN_KEYS = ('truth', 'no-truth', 'allow-degenerate', 'smoother-trajectories')
@@ -570,8 +574,7 @@ def _filter_request(command, kwargs):
 
 
 def _filter(command, model, data, kwargs):
-    if 'x0' in kwargs:
-        kwargs['x0'] = _x0_mapping(model, kwargs['x0'])
+    _x0_keys(model, kwargs)
     names, columns, sidecar = _columns(data, 'data')
     smooth = command == 'smooth'
     request = _filter_request(command, kwargs)
@@ -652,6 +655,27 @@ def _notes(err):
     return notes, error
 
 
+def _run_command(command, args, tables, make_result):
+    """A whole command as the command line runs it (tune, study, merge,
+    figures): its notes as warnings; exit 2 raises InputError, 130/143
+    KeyboardInterrupt (a study stopped, resumable), any other failure
+    NumericalError with .result; else make_result(stdout, notes)."""
+    status, stdout, err = _estlab.run(command, args, tables)
+    notes, error = _notes(err)
+    if notes:
+        import warnings
+        for n in notes:
+            warnings.warn('estlab: ' + n, RuntimeWarning, stacklevel=3)
+    if status in (130, 143):
+        raise KeyboardInterrupt('estlab %s: interrupted (call again to resume)' % command)
+    if status == 2:
+        raise InputError(error)
+    result = make_result(stdout, notes)
+    if status != 0:
+        raise _numerical(error or '%s failed (exit %d)' % (command, status), result)
+    return result
+
+
 def tune(model, data, validate=None, **kwargs):
     """Tune Q and R, and physical parameters and initial states (estlab
     tune): estimator= 'ml' | 'em' | 'als' | 'output-error', kind=,
@@ -661,8 +685,7 @@ def tune(model, data, validate=None, **kwargs):
     list of them; validate= likewise. Returns a TuneResult; a fit that is
     not verified converged raises NumericalError with .result.
     """
-    if 'x0' in kwargs:
-        kwargs['x0'] = _x0_mapping(model, kwargs['x0'])
+    _x0_keys(model, kwargs)
     tables, files = _tables(data, 'data')
     args = ['--model', _model_arg(model)]
     for f in files:
@@ -673,18 +696,8 @@ def tune(model, data, validate=None, **kwargs):
         for f in vfiles:
             args += ['--validate', f]
     args += _args('tune', kwargs) + ['--json']
-    status, out, err = _estlab.run('tune', args, tables)
-    notes, error = _notes(err)
-    result = TuneResult(out, notes) if out.strip() else None
-    for n in notes:
-        if not n.startswith('error'):
-            import warnings
-            warnings.warn('estlab: ' + n, RuntimeWarning, stacklevel=2)
-    if status == 2:
-        raise InputError(error)
-    if status != 0:
-        raise _numerical(error or 'tune failed (exit %d)' % status, result)
-    return result
+    return _run_command('tune', args, tables,
+                        lambda out, notes: TuneResult(out, notes) if out.strip() else None)
 
 
 class StudyResult:
@@ -733,17 +746,9 @@ def study(config, out, jobs=None, runs=None, shard=None, force=False):
             args += ['--' + key, _text(value)]
     if force:
         args.append('--force')
-    status, stdout, err = _estlab.run('study', args, {})
-    notes, error = _notes(err)
-    if status in (130, 143):
-        raise KeyboardInterrupt('estlab study: interrupted (resumable): ' + _os.fspath(out))
-    if status == 2:
-        raise InputError(error)
-    info = _json.loads(stdout) if stdout.strip() else {}
-    if status != 0:
-        raise _numerical(error or 'study failed (exit %d); see %s' % (status, out),
-                         StudyResult(_os.fspath(out), info) if _os.path.isdir(out) else None)
-    return StudyResult(_os.fspath(out), info)
+    folder = _os.fspath(out)
+    return _run_command('study', args, {}, lambda stdout, notes: StudyResult(
+        folder, _json.loads(stdout) if stdout.strip() else {}) if _os.path.isdir(folder) else None)
 
 
 def merge(out, shards):
@@ -751,14 +756,10 @@ def merge(out, shards):
     (estlab merge OUT SHARD...): the same bytes as one unsharded run.
     Returns a StudyResult of out.
     """
-    status, stdout, err = _estlab.run('merge', [_os.fspath(out)] + [_os.fspath(s) for s in shards],
-                                      {})
-    notes, error = _notes(err)
-    if status == 2:
-        raise InputError(error)
-    if status != 0:
-        raise _numerical(error or 'merge failed (exit %d)' % status, None)
-    return StudyResult(_os.fspath(out), {})
+    folder = _os.fspath(out)
+    return _run_command('merge', [folder] + [_os.fspath(s) for s in shards], {},
+                        lambda stdout, notes: StudyResult(folder, {})
+                        if _os.path.isdir(folder) else None)
 
 
 def figures(path):
@@ -766,12 +767,6 @@ def figures(path):
     PNG + SVG with their gnuplot scripts in path/figures. Returns the paths
     of the files written.
     """
-    status, stdout, err = _estlab.run('figures', [_os.fspath(path)], {})
-    notes, error = _notes(err)
-    if status == 2:
-        raise InputError(error)
-    if status != 0:
-        raise _numerical(error or 'figures failed (exit %d)' % status, None)
     folder = _os.path.join(_os.fspath(path), 'figures')
-    return sorted(_os.path.join(folder, f) for f in _os.listdir(folder)) if _os.path.isdir(
-        folder) else []
+    return _run_command('figures', [_os.fspath(path)], {}, lambda stdout, notes: sorted(
+        _os.path.join(folder, f) for f in _os.listdir(folder)) if _os.path.isdir(folder) else [])
