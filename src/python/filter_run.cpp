@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <optional>
+#include <unordered_map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "src/core/types.h"
 #include "src/options/filter_settings.h"
 #include "src/python/call_guard.h"
+#include "src/python/keywords.h"
 #include "src/python/tables.h"
 
 namespace py = pybind11;
@@ -44,6 +46,13 @@ class FilterRun {
     for (const std::vector<double>& row : o_.run.rows)
       for (size_t j : js) *out++ = row[j];
     return a;
+  }
+  // The columns NAME_est side by side: rows x states.
+  py::array_t<double> Estimates() const {
+    std::vector<std::string> names;
+    for (const std::string& c : o_.run.columns)
+      if (c.size() > 4 && c.compare(c.size() - 4, 4, "_est") == 0) names.push_back(c);
+    return Stack(names);
   }
   py::array_t<double> Table() const { return RowsArray(o_.run.rows, o_.run.columns.size()); }
   std::string SummaryJson() const { return o_.SummaryJson(); }
@@ -79,43 +88,91 @@ FilterRun FilterFromArgs(const Args& args, const Tables& tables, bool smooth) {
   return RunRequest(nullptr, &args, tables, smooth);
 }
 
-// The same from the key table's settings (key, value), the data's columns
-// (the table "data") and the command's own options, with no option parsing
-// (the module's fast path).
-FilterRun Filter(const std::string& model,
-                 const std::vector<std::pair<std::string, std::string>>& keys,
-                 const std::vector<std::string>& names, const std::vector<Column>& columns,
-                 const std::string& sidecar, std::optional<std::string> truth, bool no_truth,
-                 bool smooth, std::optional<int> smoother_trajectories, bool allow_degenerate) {
-  cli::FilterRequest r;
-  r.model = model;
-  for (const auto& [key, value] : keys) {
-    const FilterKey* k = FindFilterKey(key, "");
-    if (k == nullptr) throw InputError("--" + key + ": not a filter key");
-    if (k->kind == FilterKey::kRepeatable) {
-      r.settings.Add(key, value);
-    } else {
-      r.settings.Set(key, value);
-    }
+// How a keyword of estlab.filter / smooth goes into the request: a key of
+// the filter key table (its kind), one of the command's own options, or
+// neither (the command line's parser then says why).
+struct KeywordEntry {
+  enum Kind { kValue, kRepeatable, kFlag, kOwn, kNone } kind = kNone;
+  std::string key;
+};
+
+const KeywordEntry& Entry(const std::string& command, const std::string& name,
+                          const py::dict& aliases) {
+  static std::unordered_map<std::string, KeywordEntry> cache[2];
+  auto& entries = cache[command == "smooth"];
+  auto it = entries.find(name);
+  if (it != entries.end()) return it->second;
+  KeywordEntry e;
+  if (aliases.contains(name)) {
+    e.key = aliases[py::str(name)].cast<std::string>();
+  } else {
+    e.key = name;
+    std::replace(e.key.begin(), e.key.end(), '_', '-');
   }
-  r.data = "data";
-  r.truth = std::move(truth);
-  r.no_truth = no_truth;
-  r.smooth = smooth;
-  r.smoother_trajectories_given = smoother_trajectories.has_value();
-  if (smoother_trajectories) r.smoother_trajectories = *smoother_trajectories;
-  r.allow_degenerate = allow_degenerate;
-  return RunRequest(&r, nullptr, {{"data", {names, columns, sidecar}}}, smooth);
+  if (const FilterKey* k = FindFilterKey(e.key, "")) {
+    e.kind = k->kind == FilterKey::kFlag         ? KeywordEntry::kFlag
+             : k->kind == FilterKey::kRepeatable ? KeywordEntry::kRepeatable
+                                                 : KeywordEntry::kValue;
+  } else if (e.key == "truth" || e.key == "no-truth" || e.key == "allow-degenerate" ||
+             e.key == "smoother-trajectories") {
+    e.kind = KeywordEntry::kOwn;
+  }
+  return entries.emplace(name, std::move(e)).first->second;
 }
 
-// The filter key table: (key, "flag" | "repeatable" | "value").
-std::vector<std::pair<std::string, std::string>> FilterKeys() {
-  std::vector<std::pair<std::string, std::string>> out;
-  for (const FilterKey& k : FilterKeyTable())
-    out.emplace_back(k.name, k.kind == FilterKey::kFlag         ? "flag"
-                             : k.kind == FilterKey::kRepeatable ? "repeatable"
-                                                                : "value");
-  return out;
+// One keyword into the request; false when it needs the command line's
+// parser.
+bool AddKeyword(const std::string& command, const std::string& name, py::handle value,
+                const py::dict& aliases, cli::FilterRequest* r) {
+  const KeywordEntry& e = Entry(command, name, aliases);
+  static const char* kKinds[] = {"value", "repeatable", "flag"};
+  switch (e.kind) {
+    case KeywordEntry::kNone:
+      return false;
+    case KeywordEntry::kValue:
+    case KeywordEntry::kFlag:
+      for (std::string& text : Values(command, name, kKinds[e.kind], value))
+        r->settings.Set(e.key, std::move(text));
+      return true;
+    case KeywordEntry::kRepeatable:
+      for (std::string& text : Values(command, name, kKinds[e.kind], value))
+        r->settings.Add(e.key, std::move(text));
+      return true;
+    case KeywordEntry::kOwn:
+      break;
+  }
+  if (e.key == "no-truth") {
+    r->no_truth = !Values(command, name, "flag", value).empty();
+  } else if (e.key == "allow-degenerate") {
+    r->allow_degenerate = !Values(command, name, "flag", value).empty();
+  } else if (e.key == "truth") {
+    r->truth = Values(command, name, "value", value).front();
+  } else if (command == "smooth" && PyLong_CheckExact(value.ptr())) {
+    r->smoother_trajectories_given = true;
+    r->smoother_trajectories = value.cast<int>();
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// estlab.filter / smooth from keyword arguments (names as in Python, with
+// the command's aliases), the data's columns (the table "data") and its
+// sidecar, with no option parsing (the module's fast path). None when a
+// keyword needs the command line's parser (config=, an unknown key: the
+// message comes from there).
+py::object Filter(const std::string& command, const std::string& model,
+                  const std::vector<std::string>& names, const std::vector<Column>& columns,
+                  const std::string& sidecar, const py::dict& kwargs, const py::dict& aliases) {
+  cli::FilterRequest r;
+  r.model = model;
+  r.data = "data";
+  r.smooth = command == "smooth";
+  for (auto [name, value] : kwargs) {
+    if (value.is_none()) continue;
+    if (!AddKeyword(command, name.cast<std::string>(), value, aliases, &r)) return py::none();
+  }
+  return py::cast(RunRequest(&r, nullptr, {{"data", {names, columns, sidecar}}}, r.smooth));
 }
 
 }  // namespace
@@ -126,6 +183,7 @@ void RegisterFilter(py::module_& m) {
       .def_property_readonly("rows", &FilterRun::rows)
       .def("column", &FilterRun::Column)
       .def("stack", &FilterRun::Stack)
+      .def("estimates", &FilterRun::Estimates)
       .def("table", &FilterRun::Table)
       .def("summary_json", &FilterRun::SummaryJson)
       .def_property_readonly("status", &FilterRun::status)
@@ -133,7 +191,6 @@ void RegisterFilter(py::module_& m) {
       .def_property_readonly("warning", &FilterRun::warning);
   m.def("filter", &Filter);
   m.def("filter_args", &FilterFromArgs);
-  m.def("filter_keys", &FilterKeys);
 }
 
 }  // namespace estlab::python

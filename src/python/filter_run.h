@@ -9,7 +9,7 @@
 
 namespace estlab::python {
 
-// Defines FilterRun, filter, filter_args and filter_keys in the module.
+// Defines FilterRun, filter and filter_args in the module.
 void RegisterFilter(pybind11::module_& m);
 
 }  // namespace estlab::python

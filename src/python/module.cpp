@@ -24,6 +24,7 @@
 #include "src/python/bench_filter.h"
 #include "src/python/call_guard.h"
 #include "src/python/filter_run.h"
+#include "src/python/keywords.h"
 #include "src/python/tables.h"
 #include "src/registry/registry.h"
 
@@ -138,6 +139,7 @@ PYBIND11_MODULE(_estlab, m) {
   m.doc() = "estlab's C++ core (use the estlab package, not this module)";
   estlab::python::RegisterExceptions(m);
   estlab::python::RegisterFilter(m);
+  estlab::python::RegisterKeywords(m);
   m.def("simulate", &estlab::python::Simulate, py::arg("args"), py::arg("tables"));
   m.def("run", &estlab::python::Run, py::arg("command"), py::arg("args"), py::arg("tables"));
   m.def("options", &estlab::python::Options, py::arg("command"));

@@ -169,3 +169,33 @@ def test_shards_merge_and_figures_as_on_the_command_line(cli, tmp_path):
             assert a.read() == b.read(), name
     drawn = estlab.figures(merged.path)
     assert any(f.endswith('.png') for f in drawn) and any(f.endswith('.gp') for f in drawn)
+
+
+def test_keyword_values_are_written_as_python_writes_them():
+    """Every float keyword reaches the command's parser as repr() writes it:
+    the shortest text that reads back to the same double."""
+    rng = np.random.default_rng(5)
+    xs = np.concatenate([rng.standard_normal(300) * 10.0 ** rng.integers(-320, 300, 300),
+                         [0.0, -0.0, 5e-324, 1e16, 1e-5, 100000.0, 0.1, 1 / 3]])
+    for x in xs.tolist():
+        text = estlab._estlab.text(x)
+        assert text == repr(x) and np.float64(text).view(np.int64) == np.float64(x).view(np.int64)
+    assert estlab._estlab.text(list(xs[:5])) == ','.join(repr(x) for x in xs[:5])
+    assert estlab._estlab.text(np.array([[1, 0.5], [0, 2]])) == '1.0,0.5;0.0,2.0'
+    assert estlab._estlab.text({'theta': 0.5, 'n': np.int64(3)}) == 'theta=0.5,n=3'
+
+
+def test_the_fast_path_and_the_command_lines_parser_give_the_same_run(cli):
+    """estlab.filter's keywords go straight into the key table's settings;
+    the same keywords as command-line arguments (the path a config= or a
+    misspelt key takes) give the same numbers."""
+    sim = simulate_both(cli)
+    kw = dict(FILTER_KW, kind='ukf', full_cov=True, q_diag=np.array([1e-6, 1e-4]))
+    kw.pop('q_white_accel')
+    fast = estlab.filter('pendulum', sim, **kw)
+    names, columns, sidecar = estlab._columns(sim, 'data')
+    args = ['--model', 'pendulum', '--data', 'data'] + estlab._args('filter', dict(kw))
+    slow = estlab.FilterResult(estlab._estlab.filter_args(
+        args, {'data': (names, columns, sidecar)}, False))
+    same_columns(fast.columns, slow.columns)
+    same_json(fast.summary, slow.summary)

@@ -77,37 +77,8 @@ def _options(command):
     return _option_cache[command]
 
 
-def _number(v):
-    if isinstance(v, (bool, _np.bool_)):
-        raise InputError('a number was expected, got %r' % (v,))
-    if isinstance(v, (int, _np.integer)):
-        return str(int(v))
-    return repr(float(v))
-
-
-def _text(v):
-    """A value as the command line writes it."""
-    t = type(v)
-    if t is str:
-        return v
-    if t is float:
-        return repr(v)
-    if t is int:
-        return str(v)
-    if (t is list or t is tuple) and v and all(type(x) is float or type(x) is int for x in v):
-        return ','.join(repr(x) if type(x) is float else str(x) for x in v)
-    if isinstance(v, _abc.Mapping):
-        return ','.join('%s=%s' % (k, _text(x)) for k, x in v.items())
-    if isinstance(v, (tuple, list)) and v and all(isinstance(x, str) for x in v):
-        return ','.join(v)
-    if _np.ndim(v) == 0:
-        return _number(v)
-    a = _np.asarray(v, dtype=float)
-    if a.ndim == 1:
-        return ','.join(_number(x) for x in a)
-    if a.ndim == 2:
-        return ';'.join(','.join(_number(x) for x in row) for row in a)
-    raise InputError('a value of shape %s (give a number, a list, or a 2-D matrix)' % (a.shape,))
+# A value as the command line writes it (src/python/keywords.h).
+_text = _estlab.text
 
 
 def _key_error(command, name, options, aliases):
@@ -121,28 +92,10 @@ def _key_error(command, name, options, aliases):
     return InputError("estlab.%s: unknown keyword '%s'%s" % (command, name, hint))
 
 
-def _values(command, name, key, kind, value):
-    """The texts the command line gives `key` for `value` (a flag: ['true']
-    when set, [] when not)."""
-    t = type(value)
-    if kind == 'flag':
-        if t is not bool and not isinstance(value, _np.bool_):
-            raise InputError('estlab.%s: %s is a flag: True or False, got %r'
-                             % (command, name, value))
-        return ['true'] if value else []
-    if t is str:
-        return [value]
-    if t is float or t is int:
-        return [_text(value)]
-    if t is list or t is tuple:
-        if kind == 'repeatable' and value and all(type(x) is str for x in value):
-            return list(value)
-        return [_text_of(command, name, value)]
-    if kind == 'repeatable' and (t is dict or isinstance(value, _abc.Mapping)):
-        return ['%s=%s' % (k, _text_of(command, name, v)) for k, v in value.items()]
-    if t is bool or isinstance(value, _np.bool_):
-        raise InputError('estlab.%s: %s takes a value, not %r' % (command, name, value))
-    return [_text_of(command, name, value)]
+def _values(command, name, kind, value):
+    """The texts the command line gives keyword `name` of kind `kind` for
+    `value` (a flag: ['true'] when set, [] when not; src/python/keywords.h)."""
+    return _estlab.values(command, name, kind, value)
 
 
 def _args(command, kwargs):
@@ -157,17 +110,9 @@ def _args(command, kwargs):
         kind = options.get(key)
         if kind is None or key in _NOT_HERE[command]:
             raise _key_error(command, name, options, aliases)
-        for text in _values(command, name, key, kind, value):
+        for text in _values(command, name, kind, value):
             args += ['--' + key] if kind == 'flag' else ['--' + key, text]
     return args
-
-
-def _text_of(command, name, value):
-    try:
-        return _text(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError('estlab.%s: %s: cannot use %r (a number, a list of numbers, a matrix, '
-                         'a mapping or a string)' % (command, name, value)) from None
 
 
 def _numerical(message, result):
@@ -406,10 +351,16 @@ class FilterResult:
 
     def __init__(self, run):
         self._run = run
-        self.names = run.columns
+        self._names = None
         self._cache = {}
         self._summary = None
         self._states = None
+
+    @property
+    def names(self):
+        if self._names is None:
+            self._names = self._run.columns
+        return self._names
 
     @property
     def states(self):
@@ -459,7 +410,7 @@ class FilterResult:
 
     @property
     def x(self):
-        return self._stack([s + '_est' for s in self.states])
+        return self._run.estimates()
 
     @property
     def P(self):
@@ -520,72 +471,14 @@ class FilterResult:
             self.summary.get('smoother', self.summary.get('filter')), len(self), self.status)
 
 
-def _filter_keys():
-    """The filter key table: key -> 'flag' | 'repeatable' | 'value'."""
-    if 'filter keys' not in _option_cache:
-        _option_cache['filter keys'] = dict(_estlab.filter_keys())
-    return _option_cache['filter keys']
-
-
-_OWN_KEYS = ('truth', 'no-truth', 'allow-degenerate', 'smoother-trajectories')
-_name_cache = {}
-
-
-def _filter_name(command, name):
-    """(key, kind) of a keyword: kind of the filter key table, or 'own' for
-    the command's own options; None for anything else."""
-    cache = _name_cache.get(command)
-    if cache is None:
-        cache = _name_cache[command] = {}
-    if name not in cache:
-        key = _ALIASES[command].get(name) or name.replace('_', '-')
-        kind = _filter_keys().get(key)
-        cache[name] = (key, kind) if kind else (key, 'own') if key in _OWN_KEYS else None
-    return cache[name]
-
-
-def _filter_request(command, kwargs):
-    """The filter key table's (key, text) pairs and the command's own options
-    of kwargs, or None when a key needs the command line's parser (config=,
-    an unknown key: its message comes from there)."""
-    settings, own = [], {'truth': None, 'no-truth': False, 'allow-degenerate': False,
-                         'smoother-trajectories': None}
-    for name, value in kwargs.items():
-        if value is None:
-            continue
-        entry = _filter_name(command, name)
-        if entry is None:
-            return None
-        key, kind = entry
-        t = type(value)
-        if kind == 'value' and (t is str or t is float or t is int):  # the common case
-            settings.append((key, value if t is str else _text(value)))
-        elif kind != 'own':
-            settings += [(key, text) for text in _values(command, name, key, kind, value)]
-        elif key in ('no-truth', 'allow-degenerate'):
-            own[key] = bool(_values(command, name, key, 'flag', value))
-        elif key == 'truth':
-            own[key] = _values(command, name, key, 'value', value)[0]
-        elif command == 'smooth' and t is int:  # smoother-trajectories
-            own[key] = value
-        else:
-            return None
-    return settings, own
-
-
 def _filter(command, model, data, kwargs):
     _x0_keys(model, kwargs)
     names, columns, sidecar = _columns(data, 'data')
-    smooth = command == 'smooth'
-    request = _filter_request(command, kwargs)
-    if request is None:
+    run = _estlab.filter(command, _model_arg(model), names, columns, sidecar, kwargs,
+                         _ALIASES[command])
+    if run is None:  # a keyword for the command line's parser (config=, a misspelt key)
         args = ['--model', _model_arg(model), '--data', 'data'] + _args(command, kwargs)
-        run = _estlab.filter_args(args, {'data': (names, columns, sidecar)}, smooth)
-    else:
-        settings, own = request
-        run = _estlab.filter(_model_arg(model), settings, names, columns, sidecar,
-                             own['truth'], own['no-truth'], smooth,
-                             own['smoother-trajectories'], own['allow-degenerate'])
+        run = _estlab.filter_args(args, {'data': (names, columns, sidecar)}, command == 'smooth')
     result = FilterResult(run)
     if run.status != 0:
         raise _numerical(run.error, result)
