@@ -5,12 +5,9 @@
 //
 // Usage (the GIL held):
 //   std::string out, err;
-//   int status;
-//   {
-//     CallGuard guard(&out, &err);   // releases the GIL
-//     status = RunTune(args);
-//   }                                // GIL back
-//   CallGuard::RaiseIfInterrupted(); // KeyboardInterrupt after a Ctrl-C
+//   int status = CallGuard::Call(&out, &err, [&] { return RunTune(args); });
+// Call raises KeyboardInterrupt after a Ctrl-C, also when the command
+// failed because of it (a model's compiler stopped by the same Ctrl-C).
 #ifndef ESTLAB_PYTHON_CALL_GUARD_H_
 #define ESTLAB_PYTHON_CALL_GUARD_H_
 
@@ -32,11 +29,31 @@ class CallGuard {
   CallGuard(const CallGuard&) = delete;
   CallGuard& operator=(const CallGuard&) = delete;
 
+  // f() under a guard; KeyboardInterrupt when Ctrl-C came during it, whether
+  // it returned or threw. Call with the GIL held.
+  template <typename F>
+  static auto Call(std::string* out, std::string* err, F&& f) {
+    try {
+      auto result = [&] {
+        CallGuard guard(out, err);
+        return f();
+      }();
+      RaiseIfInterrupted();
+      return result;
+    } catch (const pybind11::error_already_set&) {
+      throw;
+    } catch (...) {
+      RaiseIfInterrupted();
+      throw;
+    }
+  }
+
+
+ private:
   // Raises KeyboardInterrupt when Ctrl-C came during the last call (the GIL
   // held).
   static void RaiseIfInterrupted();
 
- private:
   pybind11::gil_scoped_release release_;
   std::unique_lock<std::mutex> lock_;
   std::string *out_, *err_;

@@ -73,14 +73,10 @@ class FilterRun {
 FilterRun RunRequest(const cli::FilterRequest* request, const Args* args, const Tables& tables,
                      bool smooth) {
   std::vector<std::pair<std::string, MemoryFile>> files = MemoryFiles(tables);
-  cli::FilterOutcome o;
-  {
-    CallGuard guard(nullptr, nullptr);
+  return FilterRun(CallGuard::Call(nullptr, nullptr, [&] {
     ScopedMemoryFiles scope(std::move(files));
-    o = cli::ComputeFilter(request ? *request : cli::FilterRequestFromArgs(*args, smooth));
-  }
-  CallGuard::RaiseIfInterrupted();
-  return FilterRun(std::move(o));
+    return cli::ComputeFilter(request ? *request : cli::FilterRequestFromArgs(*args, smooth));
+  }));
 }
 
 // `estlab filter` / `smooth` from arguments as the command line gives them.

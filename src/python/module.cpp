@@ -37,13 +37,10 @@ namespace {
 
 py::tuple Simulate(const Args& args, const Tables& tables) {
   std::vector<std::pair<std::string, MemoryFile>> files = MemoryFiles(tables);
-  cli::SimulateOutcome o;
-  {
-    CallGuard guard(nullptr, nullptr);
+  const cli::SimulateOutcome o = CallGuard::Call(nullptr, nullptr, [&] {
     ScopedMemoryFiles scope(std::move(files));
-    o = cli::ComputeSimulation(args);
-  }
-  CallGuard::RaiseIfInterrupted();
+    return cli::ComputeSimulation(args);
+  });
   return py::make_tuple(o.result.columns, RowsArray(o.result.rows, o.result.columns.size()),
                         o.sidecar_json, o.summary_json, o.status, o.error);
 }
@@ -52,26 +49,16 @@ py::tuple Simulate(const Args& args, const Tables& tables) {
 // stdout and stderr kept: (exit status, stdout, stderr).
 py::tuple Run(const std::string& command, const Args& args, const Tables& tables) {
   std::vector<std::pair<std::string, MemoryFile>> files = MemoryFiles(tables);
-  int status = 0;
   std::string out, err;
-  {
-    CallGuard guard(&out, &err);
+  const int status = CallGuard::Call(&out, &err, [&] {
     ScopedMemoryFiles scope(std::move(files));
-    if (command == "tune") {
-      status = cli::RunTune(args);
-    } else if (command == "study") {
-      status = cli::RunStudyCommand(args);
-    } else if (command == "list") {
-      status = cli::RunList(args);
-    } else if (command == "merge") {
-      status = cli::RunMerge(args);
-    } else if (command == "figures") {
-      status = cli::RunFigures(args);
-    } else {
-      throw InputError("no command '" + command + "'");
-    }
-  }
-  CallGuard::RaiseIfInterrupted();
+    if (command == "tune") return cli::RunTune(args);
+    if (command == "study") return cli::RunStudyCommand(args);
+    if (command == "list") return cli::RunList(args);
+    if (command == "merge") return cli::RunMerge(args);
+    if (command == "figures") return cli::RunFigures(args);
+    throw InputError("no command '" + command + "'");
+  });
   return py::make_tuple(status, out, err);
 }
 
@@ -91,15 +78,11 @@ std::vector<std::pair<std::string, std::string>> Options(const std::string& comm
 // A model's description (`estlab list --model NAME --json`); compiles a
 // model file on first use, as the command line does.
 std::string ModelJson(const std::string& name) {
-  std::string out;
-  {
-    CallGuard guard(nullptr, nullptr);
+  return CallGuard::Call(nullptr, nullptr, [&] {
     JsonWriter json;
     cli::ModelJson(FindModel(name), &json);
-    out = json.str();
-  }
-  CallGuard::RaiseIfInterrupted();
-  return out;
+    return json.str();
+  });
 }
 
 }  // namespace

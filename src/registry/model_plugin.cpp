@@ -4,6 +4,7 @@
 #include <link.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -69,6 +70,13 @@ std::string SelfIdentity() {
   struct stat st {};
   if (self.empty() || ::stat(self.c_str(), &st) != 0) return "unknown-binary";
   return self.string() + ":" + std::to_string(st.st_size) + ":" + std::to_string(st.st_mtime);
+}
+
+// A shell's status (std::system) that says Ctrl-C stopped the command: the
+// compiler ended by SIGINT, or the shell exited 128 + SIGINT for it.
+bool StoppedByCtrlC(int status) {
+  return (WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) ||
+         (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGINT);
 }
 
 std::string Quote(const std::string& s) {  // for /bin/sh
@@ -286,6 +294,13 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
     if (!fs::exists(dir / "entry.so", ec) && !OtherCompileRunning(dir)) {
       fs::remove(dir / "model.h", ec);
       fs::remove(dir, ec);  // only when empty
+    }
+    if (StoppedByCtrlC(status)) {
+      // std::system ignored the Ctrl-C here; the compiler took it. Act on
+      // it now (the command line's handler ends the process; the Python
+      // module's raises KeyboardInterrupt), never as a compile error.
+      ::raise(SIGINT);
+      throw InputError("model " + s.path + ": compiling it was interrupted (Ctrl-C)");
     }
     throw InputError("model " + s.path + " does not compile:" + Head(output, 20));
   }
