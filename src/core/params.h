@@ -1,6 +1,8 @@
 // Named model parameters: each model lists its parameters once, as a table of
 // {name, member pointer, unit/description, constraint}, and the registry uses
 // that table to apply "--param name=value" overrides and to print defaults.
+// Also the other tables a model declares beside them: its measurements'
+// sensor groups (OutputGroupSpec).
 #ifndef ESTLAB_CORE_PARAMS_H_
 #define ESTLAB_CORE_PARAMS_H_
 

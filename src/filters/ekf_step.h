@@ -63,7 +63,7 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
   out->nu = WrapResidual<M, T>(
       zt - MeasurementAndJacobian<Model, Meas, T>(t, x_prior, u, params, &H), Meas::kAngleOutputs);
   if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&out->nu);
-  if (!KalmanGain<N, M, T>(H, P, Ru, &out->S, &out->L, &out->K)) {
+  if (!KalmanGain<N, M, T>(H, P, Ru, missing, &out->S, &out->L, &out->K)) {
     *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
     return FilterStatus::kFactorizationFailed;
   }
@@ -74,14 +74,14 @@ FilterStatus EkfUpdate(const Vec<T, Model::kStateDim>& x_prior,
     Vec<T, M> r = WrapResidual<M, T>(
         zt - MeasurementAndJacobian<Model, Meas, T>(t, x_iter, u, params, &H), Meas::kAngleOutputs);
     if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&r);
-    if (!KalmanGain<N, M, T>(H, P, Ru, &S_i, &L_i, &out->K)) {
+    if (!KalmanGain<N, M, T>(H, P, Ru, missing, &S_i, &L_i, &out->K)) {
       *why = "Cholesky of S = H P H^T + R failed in IEKF iteration " + std::to_string(i);
       return FilterStatus::kFactorizationFailed;
     }
     x_iter = x_prior + out->K * (r - H * WrapResidual<N, T>(x_prior - x_iter, Model::kAngleStates));
   }
   // P+ = (I - K H) P- (I - K H)^T + K R K^T with the last K, H
-  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru);
+  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru, missing);
   out->x = x_iter;
   if (!BeliefFinite<N, T>(out->x, out->P)) {
     *why = "updated mean or covariance is not finite";

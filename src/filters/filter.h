@@ -63,7 +63,8 @@ struct StepResult {
   std::string message;  // set when status != kOk
 
   // For the adaptive rules: the Kalman gain K (n x M; 0 rows for filters
-  // that have none) and the post-fit residual z - h(x+) (zero when unset).
+  // that have none) and the post-fit residual z - h(x+) (zero when unset;
+  // NaN in a missing component of z, as the innovation).
   // The gain has inline storage for up to kMaxGainStates rows, so returning a
   // StepResult never touches the heap (issue "Performance").
   Eigen::Matrix<double, Eigen::Dynamic, M, Eigen::ColMajor, kMaxGainStates, M> gain;

@@ -5,13 +5,14 @@
 // (no wrapping inside a set), and a square root of a positive semidefinite
 // covariance.
 //
-// Usage:
+// Usage (H, nu and R masked where z is missing, missing.h):
+//   const MissingMask<1> missing(z);
 //   Mat<1, 1> S, L;
 //   Mat<2, 1> K;
-//   if (!KalmanGain<2, 1>(H, P, R, &S, &L, &K)) return failure;   // S not PD
+//   if (!KalmanGain<2, 1>(H, P, R, missing, &S, &L, &K)) return failure;  // S not PD
 //   StepResult<1> r;
-//   SetInnovation<1>(nu, S, L, MissingMask<1>(z), &r);  // nis, log N(nu; 0, S)
-//   P = JosephUpdate<2, 1>(P, K, H, R);
+//   SetInnovation<1>(nu, S, L, missing, &r);  // nis, log N(nu; 0, S)
+//   P = JosephUpdate<2, 1>(P, K, H, R, missing);
 //
 // All functions work on fixed-size Eigen types and allocate nothing.
 #ifndef ESTLAB_FILTERS_FILTER_UTIL_H_
@@ -129,6 +130,37 @@ bool KalmanGain(const MatT<T, M, N>& H, const MatT<T, N, N>& P, const MatT<T, M,
   return AllFiniteT(*K);
 }
 
+// The same with the observed components of z only: H's and R's missing rows
+// masked (missing.h). With one component j observed out of M > 1 (one
+// sensor of several reported), the update at size 1, without the masked
+// rows' work:
+//   s = h_j P h_j^T + R_jj,  l = sqrt(s),  K_j = ((P h_j^T) / l) / l,
+// and S, L, K in the masked form (S_ii = L_ii = 1 and K's column i zero for
+// a missing i): the numbers of the size-M solve, to rounding.
+template <int N, int M, class T = double>
+bool KalmanGain(const MatT<T, M, N>& H, const MatT<T, N, N>& P, const MatT<T, M, M>& R,
+                const MissingMask<M>& missing, MatT<T, M, M>* S, MatT<T, M, M>* L,
+                MatT<T, N, M>* K) {
+  if constexpr (M > 1) {
+    if (missing.Observed() == 1) {
+      using std::sqrt;
+      const int j = missing.FirstObserved();
+      const Eigen::Matrix<T, 1, N> hp = H.row(j) * P;
+      const T s = hp.dot(H.row(j)) + R(j, j);
+      if (!(ScalarPart(s) > 0.0)) return false;
+      const T l = sqrt(s);
+      S->setIdentity();
+      (*S)(j, j) = s;
+      L->setIdentity();
+      (*L)(j, j) = l;
+      K->setZero();
+      K->col(j) = (hp.transpose() / l) / l;
+      return AllFiniteT(*K);
+    }
+  }
+  return KalmanGain<N, M, T>(H, P, R, S, L, K);
+}
+
 // Joseph form, valid for any gain K:  P+ = (I - K H) P (I - K H)^T + K R K^T,
 // symmetrised.
 template <int N, int M, class T = double>
@@ -138,6 +170,24 @@ MatT<T, N, N> JosephUpdate(const MatT<T, N, N>& P, const MatT<T, N, M>& K, const
   MatT<T, N, N> Pp = IKH * P * IKH.transpose() + K * R * K.transpose();
   Symmetrize<N, T>(&Pp);
   return Pp;
+}
+
+// The same with the observed components of z only (KalmanGain's masked
+// form); with one component j observed, at size 1: K H = k_j h_j and
+// K R K^T = k_j R_jj k_j^T (the masked rows add nothing).
+template <int N, int M, class T = double>
+MatT<T, N, N> JosephUpdate(const MatT<T, N, N>& P, const MatT<T, N, M>& K, const MatT<T, M, N>& H,
+                           const MatT<T, M, M>& R, const MissingMask<M>& missing) {
+  if constexpr (M > 1) {
+    if (missing.Observed() == 1) {
+      const int j = missing.FirstObserved();
+      const MatT<T, N, N> IKH = MatT<T, N, N>::Identity() - K.col(j) * H.row(j);
+      MatT<T, N, N> Pp = IKH * P * IKH.transpose() + (K.col(j) * R(j, j)) * K.col(j).transpose();
+      Symmetrize<N, T>(&Pp);
+      return Pp;
+    }
+  }
+  return JosephUpdate<N, M, T>(P, K, H, R);
 }
 
 // The innovation of one update in whitened form: with S = L L^T,

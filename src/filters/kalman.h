@@ -129,15 +129,21 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       return FailResult(ready, error_);
     if constexpr (MeasurementSeesTime<Meas, Model>)  // h*, H, D at this update's time
       KfLinearizeMeasurement<Model, Meas>(this->time(), params_, &lin_);
-    if (!lin_.h_star.allFinite() || !lin_.H.allFinite() || !lin_.D.allFinite())
-      return FailResult(FilterStatus::kNonFinite,
-                        "h(t, x*, u*) or its Jacobians H, D are not finite at this update");
+    // The rows of the components observed (a missing sensor's h may be
+    // undefined at x*: its rows are masked out of the update, missing.h).
+    const MissingMask<kM> missing(z);
+    if (!(lin_.h_star.allFinite() && lin_.H.allFinite() && lin_.D.allFinite()))
+      for (int j = 0; j < kM; ++j)
+        if (!missing.Missing(j) && !(std::isfinite(lin_.h_star(j)) && lin_.H.row(j).allFinite() &&
+                                     lin_.D.row(j).allFinite()))
+          return FailResult(FilterStatus::kNonFinite,
+                            "h(t, x*, u*) or its Jacobians H, D are not finite at this update");
     GaussianUpdate<double, kN, kM> u;
     std::string why;
     const FilterStatus status = KfUpdate<Model, Meas>(lin_, input_, x_, P_, z, R, &u, &why);
     if (status != FilterStatus::kOk) return FailResult(status, why);
     StepResult<kM> result;
-    SetInnovation<kM>(u.nu, u.S, u.L, MissingMask<kM>(z), &result);
+    SetInnovation<kM>(u.nu, u.S, u.L, missing, &result);
     x_ = u.x;
     P_ = u.P;
     result.gain = u.K;

@@ -111,13 +111,13 @@ FilterStatus KfUpdate(const KfLinearization<Model::kStateDim, Meas::kDim, kInput
   const MatT<T, M, M>& Ru = missing.Noise(R, &masked);
   if (missing.Any()) missing.MaskRows(&H), missing.MaskRows(&out->nu);
   // S = H P H^T + R,  K = P H^T S^-1
-  if (!KalmanGain<N, M, T>(H, P, Ru, &out->S, &out->L, &out->K)) {
+  if (!KalmanGain<N, M, T>(H, P, Ru, missing, &out->S, &out->L, &out->K)) {
     *why = "Cholesky of the innovation covariance S = H P H^T + R failed";
     return FilterStatus::kFactorizationFailed;
   }
   // x+ = x- + K nu;  P+ = (I - K H) P (I - K H)^T + K R K^T
   out->x = x + out->K * out->nu;
-  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru);
+  out->P = JosephUpdate<N, M, T>(P, out->K, H, Ru, missing);
   if (!BeliefFinite<N, T>(out->x, out->P)) {
     *why = "updated mean or covariance is not finite";
     return FilterStatus::kNonFinite;

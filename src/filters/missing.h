@@ -45,6 +45,12 @@ class MissingMask {
   bool Any() const { return observed_ < M; }
   bool Missing(int j) const { return missing_[size_t(j)]; }
   int Observed() const { return observed_; }  // m_o
+  // The first observed component (M when none is).
+  int FirstObserved() const {
+    int j = 0;
+    while (j < M && missing_[size_t(j)]) ++j;
+    return j;
+  }
 
   // Rows j of A (H, nu, the measurement points' deviations) set to zero.
   template <class Derived>

@@ -171,12 +171,26 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     Whiten<kM>(r_lower, Measurement(Measurement::Zero()), &zero_whitened, &log_det_r);
     const double log_norm = GaussianLogLikelihood<kM>(zero_whitened, log_det_r, missing.Observed());
     EvalMeasurements();
-    for (Eigen::Index i = 0; i < n; ++i) {
-      Measurement nu_i = WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
-      if (missing.Any()) missing.MaskRows(&nu_i);
-      const Measurement whitened =
-          r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
-      log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
+    if (kM > 1 && missing.Observed() == 1) {
+      // One component j observed (one sensor of several reported): the
+      // masked rows whiten to zero, so |L^-1 nu_i|^2 = (nu_ij / L_jj)^2.
+      const int j = missing.FirstObserved();
+      const double l_jj = r_lower(j, j);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double e = WrapResidual<1>(Vec<double, 1>(z(j) - predicted_measurements_(j, i)),
+                                         std::array<bool, 1>{Meas::kAngleOutputs[size_t(j)]})(0) /
+                         l_jj;
+        log_likelihoods_(i) = log_norm - 0.5 * (e * e);
+      }
+    } else {
+      for (Eigen::Index i = 0; i < n; ++i) {
+        Measurement nu_i =
+            WrapResidual<kM>(z - predicted_measurements_.col(i), Meas::kAngleOutputs);
+        if (missing.Any()) missing.MaskRows(&nu_i);
+        const Measurement whitened =
+            r_lower.template triangularView<Eigen::Lower>().solve(nu_i);  // L^-1 nu_i
+        log_likelihoods_(i) = log_norm - 0.5 * whitened.squaredNorm();
+      }
     }
     // Predicted-measurement moments with the prior weights:
     // z^ = sum_i w_i h(x_i), S = sum_i w_i dh_i dh_i^T + R, innovation = wrap(z - z^)

@@ -1,12 +1,11 @@
 #include "src/io/csv_reader.h"
 
-#include <cerrno>
+#include <charconv>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <sstream>
+#include <string_view>
 
 #include "src/core/parse.h"
 #include "src/core/types.h"
@@ -16,47 +15,101 @@ namespace estlab {
 
 namespace {
 
-std::vector<std::string> SplitLine(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  for (char c : line) {
-    if (c == ',') {
-      cells.push_back(Trim(cell));
-      cell.clear();
-    } else {
-      cell += c;
-    }
-  }
-  cells.push_back(Trim(cell));
-  return cells;
-}
-
 // Longer lines are refused: no real data row comes near it, and it stops
 // `--data /dev/zero` (no line ends at all) from filling the memory.
 constexpr size_t kMaxLineBytes = size_t(1) << 20;
 
-// The next line of `in` into *line, without its end: "\n", "\r\n" or a lone
-// "\r" (old Mac files). False at the end of the input.
-bool NextLine(std::streambuf* in, const std::string& path, long line_no, std::string* line) {
-  line->clear();
-  int c = in->sbumpc();
-  if (c == std::char_traits<char>::eof()) return false;
-  for (; c != std::char_traits<char>::eof() && c != '\n'; c = in->sbumpc()) {
-    if (c == '\r') {
-      if (in->sgetc() == '\n') in->sbumpc();
-      break;
-    }
-    if (line->size() == kMaxLineBytes)
-      throw InputError(path + ":" + std::to_string(line_no) + ": line longer than " +
-                       std::to_string(kMaxLineBytes) + " bytes");
-    line->push_back(char(c));
-  }
+std::string_view TrimView(std::string_view s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string_view::npos) return {};
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+// The line of `text` that starts at *pos, without its end ("\n", "\r\n" or
+// a lone "\r": old Mac files); *pos moves past it. False at the end.
+bool NextLine(std::string_view text, const std::string& path, long line_no, size_t* pos,
+              std::string_view* line) {
+  if (*pos >= text.size()) return false;
+  size_t end = *pos;
+  while (end < text.size() && text[end] != '\n' && text[end] != '\r') ++end;
+  if (end - *pos > kMaxLineBytes)
+    throw InputError(path + ":" + std::to_string(line_no) + ": line longer than " +
+                     std::to_string(kMaxLineBytes) + " bytes");
+  *line = text.substr(*pos, end - *pos);
+  *pos = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
   return true;
+}
+
+// The cells of `line`, trimmed, into *cells (views into line).
+void SplitCells(std::string_view line, std::vector<std::string_view>* cells) {
+  cells->clear();
+  size_t start = 0;
+  for (size_t comma; (comma = line.find(',', start)) != std::string_view::npos; start = comma + 1)
+    cells->push_back(TrimView(line.substr(start, comma - start)));
+  cells->push_back(TrimView(line.substr(start)));
 }
 
 std::string Where(const std::string& path, long line, size_t col, const std::string& name) {
   return path + ":" + std::to_string(line) + ": column " + std::to_string(col + 1) +
          (name.empty() ? "" : " ('" + name + "')");
+}
+
+// A data cell's value: NaN for an empty, "nan", "NaN" or "NA" cell, else the
+// number. std::from_chars reads what it can whole (correctly rounded, as
+// strtod does); anything else (a '+' sign, hex, a subnormal, junk, inf) goes
+// to ParseNumber, which takes what strtod takes and names the cell when it
+// refuses (Where is built only then).
+double CellValue(std::string_view c, const CsvTable& table, long line_no, size_t j) {
+  if (c.empty() || c == "nan" || c == "NaN" || c == "NA")
+    return std::numeric_limits<double>::quiet_NaN();
+  double v;
+  const auto [end, ec] = std::from_chars(c.data(), c.data() + c.size(), v);
+  if (ec == std::errc() && end == c.data() + c.size() && std::isfinite(v)) return v;
+  return ParseNumber(std::string(c), Where(table.path, line_no, j, table.columns[j]));
+}
+
+void ReadHeader(const std::vector<std::string_view>& cells, long line_no, CsvTable* table) {
+  for (size_t j = 0; j < cells.size(); ++j) {
+    if (cells[j].empty())
+      throw InputError(Where(table->path, line_no, j, "") + ": empty column name in the header");
+    for (size_t i = 0; i < j; ++i)
+      if (cells[i] == cells[j])
+        throw InputError(Where(table->path, line_no, j, std::string(cells[j])) +
+                         ": duplicate column name");
+  }
+  table->columns.assign(cells.begin(), cells.end());
+}
+
+// The table in `text`; `path` names it in messages.
+CsvTable ParseCsvText(std::string_view text, const std::string& path) {
+  CsvTable table;
+  table.path = path;
+  std::string_view line;
+  std::vector<std::string_view> cells;
+  long line_no = 0;
+  size_t pos = 0;
+  bool have_header = false;
+  while (NextLine(text, path, line_no + 1, &pos, &line)) {
+    if (++line_no == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);  // BOM
+    const std::string_view trimmed = TrimView(line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    SplitCells(line, &cells);
+    if (!have_header) {
+      ReadHeader(cells, line_no, &table);
+      have_header = true;
+      continue;
+    }
+    if (cells.size() != table.columns.size()) {
+      throw InputError(path + ":" + std::to_string(line_no) + ": expected " +
+                       std::to_string(table.columns.size()) + " columns, found " +
+                       std::to_string(cells.size()));
+    }
+    std::vector<double>& row = table.rows.emplace_back(cells.size());
+    for (size_t j = 0; j < cells.size(); ++j) row[j] = CellValue(cells[j], table, line_no, j);
+    table.line_numbers.push_back(line_no);
+  }
+  if (!have_header) throw InputError(path + ": empty file (no header row)");
+  return table;
 }
 
 }  // namespace
@@ -67,60 +120,8 @@ int CsvTable::ColumnIndex(const std::string& name) const {
   return -1;
 }
 
-namespace {
-
-// The table in `in`; `path` names it in messages.
-CsvTable ParseCsvStream(std::istream& in, const std::string& path) {
-  CsvTable table;
-  table.path = path;
-  std::string line;
-  long line_no = 0;
-  bool have_header = false;
-  while (NextLine(in.rdbuf(), path, line_no + 1, &line)) {
-    if (++line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
-    if (Trim(line).empty() || Trim(line)[0] == '#') continue;
-    std::vector<std::string> cells = SplitLine(line);
-    if (!have_header) {
-      for (size_t j = 0; j < cells.size(); ++j) {
-        if (cells[j].empty()) {
-          throw InputError(Where(path, line_no, j, "") + ": empty column name in the header");
-        }
-        for (size_t i = 0; i < j; ++i) {
-          if (cells[i] == cells[j]) {
-            throw InputError(Where(path, line_no, j, cells[j]) + ": duplicate column name");
-          }
-        }
-      }
-      table.columns = cells;
-      have_header = true;
-      continue;
-    }
-    if (cells.size() != table.columns.size()) {
-      throw InputError(path + ":" + std::to_string(line_no) + ": expected " +
-                       std::to_string(table.columns.size()) + " columns, found " +
-                       std::to_string(cells.size()));
-    }
-    std::vector<double> row(cells.size());
-    for (size_t j = 0; j < cells.size(); ++j) {
-      const std::string& c = cells[j];
-      if (c.empty() || c == "nan" || c == "NaN" || c == "NA") {
-        row[j] = std::numeric_limits<double>::quiet_NaN();
-        continue;
-      }
-      row[j] = ParseNumber(c, Where(path, line_no, j, table.columns[j]));
-    }
-    table.rows.push_back(std::move(row));
-    table.line_numbers.push_back(line_no);
-  }
-  if (!have_header) throw InputError(path + ": empty file (no header row)");
-  return table;
-}
-
-}  // namespace
-
 CsvTable ParseCsv(const std::string& text, const std::string& path) {
-  std::istringstream in(text);
-  return ParseCsvStream(in, path);
+  return ParseCsvText(text, path);
 }
 
 std::shared_ptr<const CsvTable> OpenCsv(const std::string& path) {
@@ -141,7 +142,16 @@ CsvTable ReadCsv(const std::string& path) {
                      "' is not a regular file (a FIFO, socket or device); give a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read data file '" + path + "'");
-  return ParseCsvStream(in, path);
+  // The whole file at once (a regular file: its size is known).
+  std::string text;
+  const std::streamoff size = in.seekg(0, std::ios::end).tellg();
+  if (size > 0) {
+    text.resize(size_t(size));
+    in.seekg(0).read(text.data(), size);
+    text.resize(size_t(in.gcount()));
+  }
+  if (in.bad()) throw InputError("cannot read data file '" + path + "'");
+  return ParseCsvText(text, path);
 }
 
 CsvTable TableFromColumns(const std::string& path, const std::vector<std::string>& names,

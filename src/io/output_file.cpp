@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -99,21 +100,36 @@ std::string CellForDisplay(const std::string& cell) {
   return *end == '\0' ? FormatNumber(v) : cell;
 }
 
+void AppendDouble(double v, std::string* out) {
+  if (std::isnan(v)) return;
+  char buf[32];  // "-1.2345678901234567e-308": 24
+  out->append(buf, std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17).ptr);
+}
+
 std::string FormatDouble(double v) {
-  if (std::isnan(v)) return "";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  std::string out;
+  AppendDouble(v, &out);
+  return out;
 }
 
 void WriteCsv(std::ostream& out, const std::vector<std::string>& columns,
               const std::vector<std::vector<double>>& rows) {
-  for (size_t j = 0; j < columns.size(); ++j) out << (j ? "," : "") << columns[j];
-  out << "\n";
+  std::string text;
+  for (size_t j = 0; j < columns.size(); ++j) (text += j ? "," : "") += columns[j];
+  text += '\n';
+  constexpr size_t kFlushBytes = size_t(1) << 16;
   for (const auto& row : rows) {
-    for (size_t j = 0; j < row.size(); ++j) out << (j ? "," : "") << FormatDouble(row[j]);
-    out << "\n";
+    for (size_t j = 0; j < row.size(); ++j) {
+      if (j) text += ',';
+      AppendDouble(row[j], &text);
+    }
+    text += '\n';
+    if (text.size() >= kFlushBytes) {
+      out.write(text.data(), std::streamsize(text.size()));
+      text.clear();
+    }
   }
+  out.write(text.data(), std::streamsize(text.size()));
 }
 
 void WriteTextFile(const std::string& path, const std::string& text) {

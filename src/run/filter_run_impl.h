@@ -407,11 +407,14 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
     ++s.steps;
     return true;
   };
+  const auto loop_start = std::chrono::steady_clock::now();
   if (!ForEachStep<M>(spec, data, predict, row) && s.ok) {  // a Ctrl-C noted (interrupt.h)
     s.ok = false;
     s.status = "interrupted";
     s.message = "filter " + s.filter + " interrupted before step " + std::to_string(s.steps);
   }
+  s.loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  s.us_per_step = s.steps ? 1e6 * s.loop_s / double(s.steps) : 0.0;
 
   s.mean_nis = s.updates ? nis_sum / s.updates : nan;
   ChiSquareMeanBounds95(s.updates, nis_dof, s.nis_bounds95);
@@ -423,7 +426,6 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   auto timing = [&](FilterSummary* summary) {
     summary->wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    summary->us_per_step = summary->steps ? 1e6 * summary->wall_s / summary->steps : 0.0;
   };
   auto no_lag_one = [](size_t) { return static_cast<const StateCov*>(nullptr); };
   if (!smoother) {

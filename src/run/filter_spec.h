@@ -93,8 +93,15 @@ struct FilterSummary {
   std::vector<GroupNis> group_nis;
   double mean_nees = 0.0;
   double nees_bounds95[2] = {0.0, 0.0};
+  // Seconds: wall_s the whole run (set-up, the filter loop, the rows'
+  // output, the smoother's pass); loop_s the filter loop alone (predict,
+  // update, each step's record), and us_per_step = 1e6 loop_s / steps;
+  // read_s and write_s the command's reading of the data and writing of
+  // --out (0 when not set: a run from the library).
   double wall_s = 0.0;
+  double loop_s = 0.0;
   double us_per_step = 0.0;
+  double read_s = 0.0, write_s = 0.0;
   bool ok = true;
   std::string status = "ok";
   std::string message;

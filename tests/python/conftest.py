@@ -66,7 +66,10 @@ def same_columns(a, b, skip=()):
         assert np.array_equal(x[~nan].view(np.int64), y[~nan].view(np.int64)), c
 
 
-def same_json(a, b, skip=('wall_s', 'us_per_step', 'iteration_wall_s', 'out', 'files'),
+_TIMINGS = ('wall_s', 'loop_s', 'us_per_step', 'read_s', 'write_s', 'iteration_wall_s')
+
+
+def same_json(a, b, skip=_TIMINGS + ('out', 'files'),
               names=(('d.csv', 'data'),)):
     """The same JSON values, but for timings; the command line's file names
     (names: (file, the Python call's table)) read as the tables'."""

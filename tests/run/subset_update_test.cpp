@@ -117,7 +117,21 @@ struct Osc {
       return Nl3::Eval<T>(x, p);
     }
   };
-  using Measurements = std::tuple<Lin3, Nl3, Ang3>;
+  // root3: lin3 with its third output sqrt(x1 - 2 x2 - 1), undefined (NaN)
+  // at the KF's linearisation point (the prior mean): a sensor that never
+  // reports must not stop the KF.
+  struct Root3 {
+    static constexpr const char* kName = "root3";
+    static constexpr int kDim = 3;
+    static constexpr std::array<const char*, 3> kOutputs = {"a", "b", "c"};
+    static constexpr std::array<bool, 3> kAngleOutputs = {false, false, false};
+    template <class T>
+    static Vec<T, 3> Eval(const Vec<T, 2>& x, const Params& /*p*/) {
+      using std::sqrt;
+      return Vec<T, 3>(x(0), x(1), sqrt(x(0) - 2.0 * x(1) - 1.0));
+    }
+  };
+  using Measurements = std::tuple<Lin3, Nl3, Ang3, Root3>;
 };
 
 // The outputs of Base whose bit is set in Mask, as a measurement of its own:
@@ -442,6 +456,34 @@ TEST(SubsetUpdate, KfRunEqualsTheHandKfOnEveryPattern) {
   double full[2];
   ChiSquareBounds95(updates, 3, full);
   EXPECT_GT(std::abs(bounds[1] - full[1]), 0.05);  // the observed dof, not 3 per update
+}
+
+// A component whose h is not finite at the KF's linearisation point is no
+// failure when it is never observed: the KF checks the observed rows of h*,
+// H and D only, and gives lin3's estimates (the same a and b rows).
+TEST(SubsetUpdate, KfIgnoresAnUndefinedRowOfAComponentNeverObserved) {
+  FilterData d = PatternRecord(40);
+  for (size_t k = 0; k < d.t.size(); ++k) d.z[k * 3 + 2] = kNaN;
+  FilterSpec spec = OscSpec(KfOptions{});
+  const FilterRunOutput lin = RunFilterWith<Osc, Osc::Lin3>(spec, d);
+  spec.measurement = "root3";
+  const FilterRunOutput root = RunFilterWith<Osc, Osc::Root3>(spec, d);
+  ASSERT_TRUE(root.summary.ok) << root.summary.message;
+  ASSERT_TRUE(lin.summary.ok) << lin.summary.message;
+  ASSERT_EQ(root.rows.size(), lin.rows.size());
+  for (const char* name : {"x1_est", "x2_est", "x1_var", "x2_var"}) {
+    const auto j =
+        size_t(std::find(lin.columns.begin(), lin.columns.end(), name) - lin.columns.begin());
+    ASSERT_LT(j, lin.columns.size()) << name;
+    for (size_t k = 0; k < lin.rows.size(); ++k)
+      EXPECT_NEAR(root.rows[k][j], lin.rows[k][j], 1e-12) << name << " row " << k;
+  }
+  EXPECT_NEAR(root.summary.loglik, lin.summary.loglik, 1e-12 * std::abs(lin.summary.loglik));
+  // Observed, the undefined row is a failure that says so.
+  d.z[5 * 3 + 2] = 0.5;
+  const FilterRunOutput seen = RunFilterWith<Osc, Osc::Root3>(spec, d);
+  EXPECT_FALSE(seen.summary.ok);
+  EXPECT_NE(seen.summary.message.find("not finite"), std::string::npos) << seen.summary.message;
 }
 
 // The RTS smoother over a record with every pattern equals the batch
