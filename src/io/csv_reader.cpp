@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string_view>
 
@@ -56,9 +57,9 @@ std::string Where(const std::string& path, long line, size_t col, const std::str
 
 // A data cell's value: NaN for an empty, "nan", "NaN" or "NA" cell, else the
 // number. std::from_chars reads what it can whole (correctly rounded, as
-// strtod does); anything else (a '+' sign, hex, a subnormal, junk, inf) goes
-// to ParseNumber, which takes what strtod takes and names the cell when it
-// refuses (Where is built only then).
+// strtod does); anything else (a '+' sign, hex, junk, inf, a number out of
+// range) goes to ParseNumber, which takes what strtod takes and names the
+// cell when it refuses (Where is built only then).
 double CellValue(std::string_view c, const CsvTable& table, long line_no, size_t j) {
   if (c.empty() || c == "nan" || c == "NaN" || c == "NA")
     return std::numeric_limits<double>::quiet_NaN();
@@ -142,13 +143,17 @@ CsvTable ReadCsv(const std::string& path) {
                      "' is not a regular file (a FIFO, socket or device); give a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("cannot read data file '" + path + "'");
-  // The whole file at once (a regular file: its size is known).
+  // The whole file at once: by its size, or to its end where the size says
+  // 0 (a /proc file, some FUSE mounts).
   std::string text;
   const std::streamoff size = in.seekg(0, std::ios::end).tellg();
+  in.seekg(0);
   if (size > 0) {
     text.resize(size_t(size));
-    in.seekg(0).read(text.data(), size);
+    in.read(text.data(), size);
     text.resize(size_t(in.gcount()));
+  } else {
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
   if (in.bad()) throw InputError("cannot read data file '" + path + "'");
   return ParseCsvText(text, path);

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <limits>
 #include <optional>
 #include <unordered_map>
 #include <string>
@@ -144,8 +145,12 @@ bool AddKeyword(const std::string& command, const std::string& name, py::handle 
   } else if (e.key == "truth") {
     r->truth = Values(command, name, "value", value).front();
   } else if (command == "smooth" && PyLong_CheckExact(value.ptr())) {
+    int overflow = 0;
+    const long long n = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+    if (overflow || n < std::numeric_limits<int>::min() || n > std::numeric_limits<int>::max())
+      return false;  // the parser's message says the range
     r->smoother_trajectories_given = true;
-    r->smoother_trajectories = value.cast<int>();
+    r->smoother_trajectories = int(n);
   } else {
     return false;
   }

@@ -49,8 +49,11 @@ std::string FloatText(double x) {
 // A number: an integer as itself, anything else as a float.
 std::string Number(py::handle v) {
   if (IsBool(v)) throw InputError("a number was expected, got " + Repr(v));
-  if (PyLong_Check(v.ptr()) || py::isinstance(v, Types().integer))
-    return py::str(py::int_(py::reinterpret_borrow<py::object>(v))).cast<std::string>();
+  if (PyLong_Check(v.ptr()) || py::isinstance(v, Types().integer)) {  // str(int(v))
+    py::object i = py::reinterpret_steal<py::object>(PyNumber_Long(v.ptr()));
+    if (!i) throw py::error_already_set();
+    return py::str(i).cast<std::string>();
+  }
   return FloatText(py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>());
 }
 
@@ -63,12 +66,14 @@ bool IsNumberList(py::handle v) {
     if (!PyFloat_CheckExact(x.ptr()) && !PyLong_CheckExact(x.ptr())) return false;
   return true;
 }
-bool IsStringList(py::handle v) {
+// ['imu', 'gps']: a non-empty list or tuple of strings (exact: only str
+// itself, not a subclass such as numpy's str_).
+bool IsStringList(py::handle v, bool exact) {
   if (!PyList_Check(v.ptr()) && !PyTuple_Check(v.ptr())) return false;
   py::sequence s = py::reinterpret_borrow<py::sequence>(v);
   if (s.size() == 0) return false;
   for (py::handle x : s)
-    if (!PyUnicode_Check(x.ptr())) return false;
+    if (exact ? !PyUnicode_CheckExact(x.ptr()) : !PyUnicode_Check(x.ptr())) return false;
   return true;
 }
 
@@ -138,7 +143,7 @@ std::string Text(py::handle v) {
     }
     return out;
   }
-  if (IsStringList(v)) {
+  if (IsStringList(v, false)) {
     for (py::handle x : v) {
       if (!out.empty()) out += ',';
       out += x.cast<std::string>();
@@ -167,7 +172,7 @@ std::vector<std::string> Values(const std::string& command, const std::string& n
   if (PyUnicode_CheckExact(p)) return {value.cast<std::string>()};
   if (PyFloat_CheckExact(p) || PyLong_CheckExact(p)) return {Text(value)};
   if (PyList_CheckExact(p) || PyTuple_CheckExact(p)) {
-    if (kind == "repeatable" && IsStringList(value)) {
+    if (kind == "repeatable" && IsStringList(value, true)) {
       std::vector<std::string> out;
       for (py::handle x : value) out.push_back(x.cast<std::string>());
       return out;

@@ -180,7 +180,7 @@ def test_keyword_values_are_written_as_python_writes_them():
     for x in xs.tolist():
         text = estlab._estlab.text(x)
         assert text == repr(x) and np.float64(text).view(np.int64) == np.float64(x).view(np.int64)
-    assert estlab._estlab.text(list(xs[:5])) == ','.join(repr(x) for x in xs[:5])
+    assert estlab._estlab.text(list(xs[:5])) == ','.join(repr(x) for x in xs[:5].tolist())
     assert estlab._estlab.text(np.array([[1, 0.5], [0, 2]])) == '1.0,0.5;0.0,2.0'
     assert estlab._estlab.text({'theta': 0.5, 'n': np.int64(3)}) == 'theta=0.5,n=3'
 
@@ -194,6 +194,8 @@ def test_the_fast_path_and_the_command_lines_parser_give_the_same_run(cli):
     kw.pop('q_white_accel')
     fast = estlab.filter('pendulum', sim, **kw)
     names, columns, sidecar = estlab._columns(sim, 'data')
+    assert estlab._estlab.filter('filter', 'pendulum', names, columns, sidecar, dict(kw),
+                                 estlab._ALIASES['filter']) is not None  # the fast path ran
     args = ['--model', 'pendulum', '--data', 'data'] + estlab._args('filter', dict(kw))
     slow = estlab.FilterResult(estlab._estlab.filter_args(
         args, {'data': (names, columns, sidecar)}, False))
