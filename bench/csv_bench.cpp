@@ -30,7 +30,8 @@ const std::vector<std::vector<double>>& Rows() {
     std::vector<std::vector<double>> out(kRows, std::vector<double>(kCols));
     for (int i = 0; i < kRows; ++i)
       for (int j = 0; j < kCols; ++j)
-        out[size_t(i)][size_t(j)] = j == 0 ? i * 0.0125 : normal(rng) * std::pow(10.0, exponent(rng));
+        out[size_t(i)][size_t(j)] =
+            j == 0 ? i * 0.0125 : normal(rng) * std::pow(10.0, exponent(rng));
     return out;
   }();
   return rows;
@@ -47,8 +48,9 @@ std::vector<std::string> Names() {
 }
 
 void SetCellCounter(benchmark::State& state) {
-  state.counters["cell"] = benchmark::Counter(
-      double(kRows) * kCols, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["cell"] =
+      benchmark::Counter(double(kRows) * kCols, benchmark::Counter::kIsIterationInvariantRate |
+                                                    benchmark::Counter::kInvert);
 }
 
 void BM_CsvWrite(benchmark::State& state) {

@@ -48,7 +48,6 @@ class CallGuard {
     }
   }
 
-
  private:
   // Raises KeyboardInterrupt when Ctrl-C came during the last call (the GIL
   // held).

@@ -22,19 +22,18 @@ struct PyTypes {
 const PyTypes& Types() {
   static const PyTypes* t = [] {
     py::module_ np = py::module_::import("numpy");
-    return new PyTypes{np.attr("bool_"), np.attr("integer"),
-                       py::module_::import("collections.abc").attr("Mapping"), np.attr("ndim"),
-                       np.attr("asarray"), np.attr("float64")};
+    return new PyTypes{np.attr("bool_"),
+                       np.attr("integer"),
+                       py::module_::import("collections.abc").attr("Mapping"),
+                       np.attr("ndim"),
+                       np.attr("asarray"),
+                       np.attr("float64")};
   }();
   return *t;
 }
 
-bool IsBool(py::handle v) {
-  return PyBool_Check(v.ptr()) || py::isinstance(v, Types().bool_);
-}
-bool IsMapping(py::handle v) {
-  return PyDict_Check(v.ptr()) || py::isinstance(v, Types().mapping);
-}
+bool IsBool(py::handle v) { return PyBool_Check(v.ptr()) || py::isinstance(v, Types().bool_); }
+bool IsMapping(py::handle v) { return PyDict_Check(v.ptr()) || py::isinstance(v, Types().mapping); }
 std::string Repr(py::handle v) { return py::repr(v).cast<std::string>(); }
 
 // Python's repr of a float.
@@ -77,22 +76,16 @@ bool IsStringList(py::handle v, bool exact) {
   return true;
 }
 
-// The rows of a 1-D or 2-D float64 array.
+// The rows of a 1-D (one row) or 2-D float64 array: "1,2;3,4".
 std::string ArrayText(const py::array_t<double>& a) {
+  const py::ssize_t rows = a.ndim() == 1 ? 1 : a.shape(0);
+  const py::ssize_t cols = a.ndim() == 1 ? a.shape(0) : a.shape(1);
   std::string out;
-  const double* d = a.data();
-  if (a.ndim() == 1) {
-    for (py::ssize_t i = 0; i < a.shape(0); ++i) {
-      if (i) out += ',';
-      out += FloatText(d[i]);
-    }
-    return out;
-  }
-  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+  for (py::ssize_t i = 0; i < rows; ++i) {
     if (i) out += ';';
-    for (py::ssize_t j = 0; j < a.shape(1); ++j) {
+    for (py::ssize_t j = 0; j < cols; ++j) {
       if (j) out += ',';
-      out += FloatText(d[i * a.shape(1) + j]);
+      out += FloatText(a.data()[i * cols + j]);
     }
   }
   return out;
@@ -100,8 +93,7 @@ std::string ArrayText(const py::array_t<double>& a) {
 
 // Raised by Text for a value it cannot write (and numpy's own TypeError,
 // ValueError, OverflowError): "cannot use" with the command and keyword.
-[[noreturn]] void CannotUse(const std::string& command, const std::string& name,
-                            py::handle value) {
+[[noreturn]] void CannotUse(const std::string& command, const std::string& name, py::handle value) {
   throw InputError("estlab." + command + ": " + name + ": cannot use " + Repr(value) +
                    " (a number, a list of numbers, a matrix, a mapping or a string)");
 }
@@ -130,8 +122,7 @@ std::string Text(py::handle v) {
   if (IsNumberList(v)) {
     for (py::handle x : v) {
       if (!out.empty()) out += ',';
-      out += PyFloat_CheckExact(x.ptr()) ? FloatText(PyFloat_AS_DOUBLE(x.ptr()))
-                                         : py::str(x).cast<std::string>();
+      out += Text(x);  // a float or an int: the lines above
     }
     return out;
   }

@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <limits>
-#include <random>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <random>
 #include <set>
 
 #include "error_text.h"
@@ -115,8 +115,9 @@ TEST(CsvReader, RefusesDirectoriesAndEndlessFiles) {
 TEST(CsvReader, EveryDoubleWrittenReadsBackBitForBit) {
   std::mt19937_64 rng(39);
   std::vector<std::vector<double>> rows;
-  std::vector<double> specials = {0.0, -0.0, 5e-324, -2.2250738585072009e-308,
-                                  1.7976931348623157e308, 0.1, 1.0 / 3, 1e16, 1e-5, 123456.0};
+  std::vector<double> specials = {
+      0.0,  -0.0, 5e-324,  -2.2250738585072009e-308, 1.7976931348623157e308, 0.1, 1.0 / 3,
+      1e16, 1e-5, 123456.0};
   for (size_t i = 0; i < 20000; ++i) {
     std::vector<double> row(4);
     for (double& v : row) {
