@@ -30,6 +30,20 @@
 //                          over the n_w states of the position/rate pairs
 //             fixed        unchanged
 //           (the same for R with B_k).
+// Rows with some components missing (the filters' subset update,
+// src/filters/missing.h): the missing z_U are latent too (Shumway &
+// Stoffer, Time Series Analysis and Its Applications, 4th ed., 2017,
+// sec. 6.4). Given x and the observed z_O, at the current R,
+//   z_U - h_U(x) ~ N(G e_O, R_UU - G R_OU),   G = R_UO R_OO^-1,
+//   e_O = wrap(z_O - h_O(x)),
+// so with T the M x M map T(:, O) = [I; G], T(:, U) = 0 and e the
+// residual with e_U = 0,
+//   B_k = T E[e e^T] T^T + [0 0; 0 R_UU - G R_OU]   (U block last),
+// which for a diagonal R keeps the observed block's residuals and carries
+// R_UU over. EM stays EM: the NLL still never rises for the KF, and a
+// fixed point is a stationary point of the likelihood over the observed
+// components. A row with no component observed is not a measurement and
+// adds nothing.
 // The transition from the prior to the first row (spec.t0 before it) is not
 // in the M-step, and P0 is not re-estimated.
 //
@@ -69,6 +83,7 @@
 #include "adaptive/tune_verdict.h"
 #include "adaptive/tuner_drivers.h"
 #include "adaptive/tuner_result.h"
+#include "src/filters/missing.h"
 #include "src/run/filter_run_impl.h"
 
 namespace estlab {
@@ -139,19 +154,60 @@ bool AddTransition(const InnovationLikelihood<Model, Meas>& lik, const SigmaPoin
   return true;
 }
 
-// Adds B_k of a measured row at time t (input u there).
+// The expected residual map T and the carried covariance of a row with
+// some components missing (see the header comment): *T (M x M) and *carried
+// from the current R and the missing components of `missing`.
+template <int M>
+void MissingRowMap(const Mat<M, M>& r_now, const MissingMask<M>& missing, Mat<M, M>* T,
+                   Mat<M, M>* carried) {
+  std::vector<int> o, u;
+  for (int j = 0; j < M; ++j) (missing.Missing(j) ? u : o).push_back(j);
+  const auto no = Eigen::Index(o.size()), nu = Eigen::Index(u.size());
+  Eigen::MatrixXd r_oo(no, no), r_ou(no, nu), r_uu(nu, nu);
+  for (Eigen::Index a = 0; a < no; ++a) {
+    for (Eigen::Index b = 0; b < no; ++b) r_oo(a, b) = r_now(o[size_t(a)], o[size_t(b)]);
+    for (Eigen::Index b = 0; b < nu; ++b) r_ou(a, b) = r_now(o[size_t(a)], u[size_t(b)]);
+  }
+  for (Eigen::Index a = 0; a < nu; ++a)
+    for (Eigen::Index b = 0; b < nu; ++b) r_uu(a, b) = r_now(u[size_t(a)], u[size_t(b)]);
+  const Eigen::LDLT<Eigen::MatrixXd> r_oo_solve(r_oo);
+  const Eigen::MatrixXd g_t = r_oo_solve.solve(r_ou);  // G^T = R_OO^-1 R_OU
+  const Eigen::MatrixXd r_uu_o = r_uu - g_t.transpose() * r_ou;
+  T->setZero();
+  carried->setZero();
+  for (Eigen::Index a = 0; a < no; ++a) {
+    (*T)(o[size_t(a)], o[size_t(a)]) = 1.0;
+    for (Eigen::Index b = 0; b < nu; ++b) (*T)(u[size_t(b)], o[size_t(a)]) = g_t(a, b);
+  }
+  for (Eigen::Index a = 0; a < nu; ++a)
+    for (Eigen::Index b = 0; b < nu; ++b) (*carried)(u[size_t(a)], u[size_t(b)]) = r_uu_o(a, b);
+}
+
+// Adds B_k of a measured row at time t (input u there); r_now is the
+// current R, for the components of z that are missing (NaN).
 template <class Model, class Meas>
 bool AddMeasurement(const InnovationLikelihood<Model, Meas>& lik, const SigmaPointSet& state,
                     const SmoothedMoments<Model::kStateDim>& row, const Vec<double, Meas::kDim>& z,
-                    double t, const InputOf<Model>& u, EmSums<Model::kStateDim, Meas::kDim>* sums) {
+                    double t, const InputOf<Model>& u, const Mat<Meas::kDim, Meas::kDim>& r_now,
+                    EmSums<Model::kStateDim, Meas::kDim>* sums) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   PointsT<double, N> points(N, state.unit_points.cols());
   if (!row.P.allFinite() || !CubaturePoints<N>(state, row.x, row.P, &points)) return false;
+  const MissingMask<M> missing(z);
+  const Vec<double, M> z_seen = z.array().isFinite().select(z, 0.0);
+  Mat<M, M> b = Mat<M, M>::Zero();
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
-    const Vec<double, M> e = lik.MeasurementResidual(z, t, points.col(i), u);
-    sums->b.noalias() += state.mean_weights(i) * e * e.transpose();
+    Vec<double, M> e = lik.MeasurementResidual(z_seen, t, points.col(i), u);
+    missing.MaskRows(&e);  // e_U = 0, whatever h_U(x) is
+    b.noalias() += state.mean_weights(i) * e * e.transpose();
   }
+  if (missing.Any()) {
+    Mat<M, M> T, carried;
+    MissingRowMap<M>(r_now, missing, &T, &carried);
+    b = T * b * T.transpose() + carried;
+  }
+  sums->b += b;
   ++sums->measurements;
   return true;
 }
@@ -169,6 +225,8 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
   static thread_local const SigmaPointSet state = MakeSigmaPointSet(N, cubature);
   FilterSpec smooth = spec;
   smooth.smooth = true;
+  const Mat<Meas::kDim, Meas::kDim> r_now =
+      lik.r_param().template Matrix<double>(theta + lik.q_param().NumParams(), 0.0);
   std::vector<SmoothedMoments<N>> rows;
   for (size_t set = 0; set < datasets.size(); ++set) {
     const FilterData& d = datasets[set];
@@ -197,7 +255,7 @@ bool EStep(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec& spec,
         },
         [&](size_t k, const Vec<double, Meas::kDim>* z, const double* u) {
           if (z == nullptr ||
-              AddMeasurement(lik, state, rows[k], *z, d.t[k], InputFrom<Model>(u), sums))
+              AddMeasurement(lik, state, rows[k], *z, d.t[k], InputFrom<Model>(u), r_now, sums))
             return true;
           *why = "the smoothed covariance of row " + std::to_string(k) + where +
                  " (t = " + FormatNumber(d.t[k]) + ") is not positive semidefinite";
@@ -355,24 +413,6 @@ bool EmIterations(const InnovationLikelihood<Model, Meas>& lik, const FilterSpec
   return false;
 }
 
-// EM's M-step sums need every component of a measured row: a row with some
-// of them missing (the filters' subset update, src/filters/missing.h) is
-// refused, naming the file, line and column.
-template <class Meas>
-void RefusePartialRows(const std::vector<FilterData>& datasets) {
-  for (const FilterData& d : datasets)
-    for (size_t k = 0; k < d.t.size(); ++k) {
-      if (!RowUpdates(d, k)) continue;
-      for (int j = 0; j < Meas::kDim; ++j)
-        if (!std::isfinite(d.z[k * Meas::kDim + size_t(j)]))
-          throw InputError(d.path + ":" + std::to_string(k < d.lines.size() ? d.lines[k] : 0) +
-                           ": z_" + Meas::kOutputs[size_t(j)] +
-                           " is missing in a measured row; the em estimator needs every "
-                           "component of a row or none (the ml estimator updates with the "
-                           "observed ones)");
-    }
-}
-
 template <class Model, class Meas>
 void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, TuneResult* out) {
   const FilterSpec& spec = problem.spec;
@@ -387,7 +427,6 @@ void RunEm(const Objective<Model, Meas>& objective, const TuneProblem& problem, 
             "--estimate-x0 with the em estimator needs the prior at the first row (t0 " +
             FormatNumber(spec.t0) + " is before the first row" +
             (d.path.empty() ? "" : " of " + d.path) + ", t = " + FormatNumber(d.t.front()) + ")");
-  RefusePartialRows<Meas>(problem.datasets);
   TuneStart start;
   start.theta_start = result.theta_initial;
   start.nll_start = result.nll_initial;
