@@ -8,6 +8,7 @@
 #include "src/io/output_file.h"
 #include "src/options/estimate_flags.h"
 #include "src/options/filter_settings.h"
+#include "src/options/group_items.h"
 #include "src/options/tuner_settings.h"
 #include "studies/study_config_parts.h"
 
@@ -88,7 +89,9 @@ Combo BuildCombo(const ScenarioConfig& sc, const SectionValues& scen, int fi,
   std::map<std::string, const Value*> origin;  // settings key -> where it was set (null: by us)
   auto add = [&](const std::string& key, const std::string& value, const Value* from) {
     const FilterKey* k = FindFilterKey(key, "");
-    if (k != nullptr && k->kind == FilterKey::kRepeatable)
+    if (key == "r-diag" || key == "r")  // `r-diag = imu=..., gps=...`: one value per group
+      for (const std::string& group : SplitGroupValues(value)) settings.Add(key, group);
+    else if (k != nullptr && k->kind == FilterKey::kRepeatable)
       settings.Add(key, value);
     else
       settings.Set(key, value);

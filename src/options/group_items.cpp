@@ -21,4 +21,16 @@ std::vector<std::pair<std::string, std::string>> ParseGroupItems(const std::stri
   return out;
 }
 
+std::vector<std::string> SplitGroupValues(const std::string& text) {
+  if (text.find('=') == std::string::npos) return {text};
+  std::vector<std::string> out;
+  for (const std::string& item : SplitTrimmed(text, ',')) {
+    if (out.empty() || item.find('=') != std::string::npos)
+      out.push_back(item);
+    else
+      out.back() += "," + item;
+  }
+  return out;
+}
+
 }  // namespace estlab

@@ -190,6 +190,45 @@ TEST(StudyConfig, TunedNoiseSettings) {
       << ParseError(Replace(text, "filters = ekf,ukf", "filters = ekf,pf"));
 }
 
+// Issue 35: a noise section gives R per sensor group on one line,
+// `r-diag = GROUP=values, GROUP=values` (the command line's --r-diag once per
+// group); a group's block may hold several values, `r` takes a matrix per
+// group, and the start of a tuned R reads the same. Errors name the line.
+TEST(StudyConfig, NoiseSectionsGiveRPerSensorGroup) {
+  if (!FiltersAvailable()) GTEST_SKIP() << "no filter runner in this build yet";
+  const std::string head =
+      "[study]\nname = g\nseed = 1\nruns = 2\n\n"
+      "[scenario.cart]\nmodel = cart-pole\nx0 = theta=3\ndt = 0.01\nsteps = 50\n"
+      "process-noise = diag 1e-8,1e-6,1e-8,1e-6\nmeasurement = position,encoder\n"
+      "meas-noise-var = 1e-4,1e-4\nsensor-rate = position=1\n"
+      "prior-p0-diag = 1e-4,1e-4,1e-4,1e-4\n\n[filter.ekf]\nkind = ekf\n\n";
+  const std::string diag =
+      head + "[noise.hand]\nq = oracle\nr-diag = position=2e-4, encoder=3e-4\n";
+  const StudyConfig c = ParseStudyConfig(diag, "s.ini");
+  ASSERT_EQ(c.scenarios[0].combos.size(), 1u);
+  EXPECT_EQ(c.scenarios[0].combos[0].spec.r, (std::vector<double>{2e-4, 0.0, 0.0, 3e-4}));
+  const StudyConfig m = ParseStudyConfig(
+      head + "[noise.hand]\nq = oracle\nr = encoder=3e-4, position=2e-4\n", "s.ini");
+  EXPECT_EQ(m.scenarios[0].combos[0].spec.r, (std::vector<double>{2e-4, 0.0, 0.0, 3e-4}));
+  const StudyConfig t = ParseStudyConfig(
+      head +
+          "[noise.tuned]\nq = oracle\nr = tuned\ninit-r-diag = position=5e-4, encoder=6e-4\n"
+          "r-param = position=scalar,encoder=scalar\n",
+      "s.ini");
+  EXPECT_TRUE(t.scenarios[0].combos[0].tune);
+  EXPECT_EQ(t.scenarios[0].combos[0].spec.r, (std::vector<double>{5e-4, 0.0, 0.0, 6e-4}));
+  for (const auto& [bad, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"position=2e-4, gps=3e-4", "unknown sensor group 'gps'"},
+           {"position=2e-4, position=3e-4", "sensor group 'position' is given twice"},
+           {"position=2e-4", "no R for sensor group 'encoder'"},
+           {"2e-4, encoder=3e-4", "not both"},
+           {"position=2e-4,1, encoder=3e-4", "one per output of group 'position'"}}) {
+    const std::string error = ParseError(Replace(diag, "position=2e-4, encoder=3e-4", bad));
+    EXPECT_EQ(error.rfind("s.ini:22: [noise.hand] r-diag: ", 0), 0u) << bad << ": " << error;
+    EXPECT_NE(error.find(expected), std::string::npos) << bad << ": " << error;
+  }
+}
+
 // The truth's white-acceleration covariance pairs states (0,1), (2,3), ...;
 // the filters use each model's own (position, rate) pairs. They must agree.
 TEST(StudyConfig, WhiteAccelPairsMatchEveryModel) {
