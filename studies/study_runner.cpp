@@ -9,7 +9,6 @@
 #include <boost/version.hpp>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <ctime>
 #include <exception>
@@ -17,7 +16,6 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -26,6 +24,7 @@
 #include "adaptive/tuner.h"
 #include "estlab_version.h"
 #include "src/core/random.h"
+#include "src/core/task_pool.h"
 #include "src/core/types.h"
 #include "src/io/folder_lock.h"
 #include "src/io/json.h"
@@ -529,6 +528,160 @@ StudyRunSummary Conclude(const StudyConfig& config, const std::string& dir, doub
 
 }  // namespace
 
+namespace {
+
+// Step 1 of RunStudy: the results folder, locked by the caller, is new or
+// holds results of this very study and shard to resume; study.state says
+// "running" from here on. True when it resumes.
+bool OpenResults(const StudyConfig& config, const StudyRunOptions& options, int runs, int jobs,
+                 StudyState* state) {
+  const std::string& dir = options.out_dir;
+  const bool resuming = ReadStudyState(dir, state);
+  if (resuming) {
+    if (state->config_hash != ConfigHash(config.text))
+      throw InputError("'" + dir + "' holds results of a different configuration (" + dir +
+                       "/config.ini); use another --out or delete it");
+    if (runs < state->runs && !options.force)
+      throw InputError("'" + dir + "' holds " + std::to_string(state->runs) +
+                       " runs per scenario; --runs " + std::to_string(runs) + " would drop runs " +
+                       std::to_string(runs) + ".." + std::to_string(state->runs - 1) +
+                       " from its results. Use another --out, or --force to keep only the first " +
+                       std::to_string(runs));
+    if (state->shard != options.shard || state->shards != options.shards)
+      throw InputError("'" + dir + "' holds shard " + std::to_string(state->shard) + "/" +
+                       std::to_string(state->shards) + ", not " + std::to_string(options.shard) +
+                       "/" + std::to_string(options.shards));
+  } else if (!FolderIsEmptyButLock(dir)) {
+    throw InputError("'" + dir + "' exists and is not a study results folder (no study.state)");
+  }
+  if (!resuming) WriteTextFile(dir + "/config.ini", config.text);
+  state->config_hash = ConfigHash(config.text);
+  state->runs = runs;
+  state->shard = options.shard;
+  state->shards = options.shards;
+  state->status = "running";
+  state->jobs = jobs;
+  state->config_path = fs::absolute(config.path).lexically_normal().string();
+  if (!resuming || state->started.empty()) state->started = NowUtc();
+  state->finished.clear();
+  state->files.clear();  // the files change from here on
+  WriteStudyState(dir, *state);
+  return resuming;
+}
+
+struct RunTask {
+  int scenario, run;
+};
+
+// Step 2: the runs of this shard still to do. Finished runs (every filter x
+// noise row present in all three files, study_integrity.h) keep their rows;
+// damaged ones are run again. *total counts the shard's runs, *finished the
+// kept ones.
+std::vector<RunTask> PendingRuns(const StudyConfig& config, const StudyRunOptions& options,
+                                 int runs, long* total, long* finished) {
+  const std::string& dir = options.out_dir;
+  const RunCoverage coverage = CheckRunCoverage(config, dir, runs, options.shard, options.shards);
+  if (coverage.damaged > 0)
+    std::cerr << "estlab study: " << coverage.damaged << " finished run(s) in '" << dir
+              << "' have rows missing or extra (" << coverage.damage.front()
+              << "); running them again\n";
+  KeepFinished(dir + "/runs.csv", RunsColumns(config), coverage.complete);
+  KeepFinished(dir + "/steps.csv", StepsColumns(config), coverage.complete);
+  KeepFinished(dir + "/timing.csv", TimingColumns(config), coverage.complete);
+  std::vector<RunTask> tasks;
+  *total = 0;
+  for (size_t s = 0; s < config.scenarios.size(); ++s)
+    for (int i = 0; i < ScenarioRuns(config.scenarios[s], runs); ++i) {
+      if (i % options.shards != options.shard - 1) continue;
+      ++*total;
+      if (!coverage.complete.count({config.scenarios[s].name, i})) tasks.push_back({int(s), i});
+    }
+  *finished = long(coverage.complete.size());
+  return tasks;
+}
+
+// The run files, appended to in run order.
+struct RunFiles {
+  explicit RunFiles(const std::string& dir)
+      : dir(dir),
+        runs(dir + "/runs.csv", std::ios::app | std::ios::binary),
+        steps(dir + "/steps.csv", std::ios::app | std::ios::binary),
+        timing(dir + "/timing.csv", std::ios::app | std::ios::binary) {
+    if (!runs || !steps || !timing)
+      throw InputError("cannot append to the run files in '" + dir + "'");
+  }
+  // runs.csv last: a run is finished once its rows are there.
+  void Append(const RunText& r) {
+    AppendOrThrow(steps, r.steps, dir + "/steps.csv");
+    AppendOrThrow(timing, r.timing, dir + "/timing.csv");
+    AppendOrThrow(runs, r.runs, dir + "/runs.csv");
+  }
+  std::string dir;
+  std::ofstream runs, steps, timing;
+};
+
+// Step 3: one task pool (src/core/task_pool.h) for the pending tunings and
+// the runs. A run waits only for the tunings of its own scenario; the
+// tunings come first in the pool's order. The rows are appended in run
+// order whatever finished first, so the files do not depend on jobs.
+// Returns the runs written.
+long RunTasks(const RunContext& ctx, StudyConfig* tuned, StudyTunings* tunings,
+              const std::vector<RunTask>& runs, int jobs, const StudyRunOptions& options,
+              Progress* progress, StudyRunSummary* summary) {
+  const size_t n_tune = tunings ? tunings->Pending() : 0;
+  std::vector<std::vector<size_t>> after(n_tune + runs.size());
+  for (size_t r = 0; r < runs.size(); ++r)
+    for (size_t i = 0; i < n_tune; ++i)
+      if (tunings->ScenarioOf(i) == runs[r].scenario) after[n_tune + r].push_back(i);
+  std::vector<std::optional<RunText>> results(runs.size());
+  RunFiles files(ctx.dir);
+  const size_t n_tasks = after.size();  // before `after` moves into the pool
+  TaskPool pool(jobs, n_tasks,
+                [&](size_t task, int) {
+                  if (task < n_tune)
+                    tunings->Tune(task, tuned);
+                  else
+                    results[task - n_tune] =
+                        RunOne(ctx, runs[task - n_tune].scenario, runs[task - n_tune].run);
+                },
+                {.after = std::move(after), .order = {}, .stop = options.stop});
+  long written = 0;
+  for (size_t r = 0; r < runs.size(); ++r) {
+    while (!pool.WaitFor(n_tune + r, std::chrono::milliseconds(200)) && !pool.Ended())
+      progress->Update(summary->resumed_runs + written, false);
+    if (!results[r]) break;  // stopped, or a task failed (Join rethrows)
+    files.Append(*results[r]);
+    summary->failed_filter_runs += results[r]->failed;
+    results[r].reset();
+    progress->Update(summary->resumed_runs + ++written, false);
+  }
+  pool.Join();
+  return written;
+}
+
+// Step 4 (before Conclude): tuned.csv, from this process's tunings or, in a
+// complete folder, the earlier one's; counts the failed ones. False when a
+// tuning did not run (stopped).
+bool RecordTunings(const StudyTunings* tunings, const std::string& dir, StudyRunSummary* summary) {
+  if (tunings != nullptr) {
+    const StudyTuningSummary t = tunings->Summary();
+    summary->tunings = t.total;
+    summary->reused_tunings = t.reused;
+    if (t.interrupted) return false;
+    if (!t.csv.empty()) WriteTextFile(dir + "/tuned.csv", t.csv);
+  }
+  if (fs::exists(dir + "/tuned.csv")) {
+    const CsvText csv = ReadCsvText(dir + "/tuned.csv");
+    const int status = csv.Column("status");
+    for (const auto& row : csv.rows)
+      summary->failed_tunings +=
+          status >= 0 && size_t(status) < row.size() && row[status] == "failed";
+  }
+  return true;
+}
+
+}  // namespace
+
 StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError(error);
@@ -536,201 +689,42 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   const std::string& dir = options.out_dir;
   const int runs = options.runs > 0 ? options.runs : config.study.runs;
   const int jobs = options.jobs > 0 ? options.jobs : config.study.jobs;
-
-  // The folder: new, or results of this very study and shard to resume,
-  // locked for this process (a second one on the same --out fails here).
   if (fs::exists(dir) && !fs::is_directory(dir))
     throw InputError("'" + dir + "' exists and is not a folder");
   fs::create_directories(dir);
-  const FolderLock lock(dir);
+  const FolderLock lock(dir);  // a second process on the same --out fails here
   StudyState state;
-  const bool resuming = ReadStudyState(dir, &state);
-  if (resuming) {
-    if (state.config_hash != ConfigHash(config.text))
-      throw InputError("'" + dir + "' holds results of a different configuration (" + dir +
-                       "/config.ini); use another --out or delete it");
-    if (runs < state.runs && !options.force)
-      throw InputError("'" + dir + "' holds " + std::to_string(state.runs) +
-                       " runs per scenario; --runs " + std::to_string(runs) + " would drop runs " +
-                       std::to_string(runs) + ".." + std::to_string(state.runs - 1) +
-                       " from its results. Use another --out, or --force to keep only the first " +
-                       std::to_string(runs));
-    if (state.shard != options.shard || state.shards != options.shards)
-      throw InputError("'" + dir + "' holds shard " + std::to_string(state.shard) + "/" +
-                       std::to_string(state.shards) + ", not " + std::to_string(options.shard) +
-                       "/" + std::to_string(options.shards));
-  } else if (!FolderIsEmptyButLock(dir)) {
-    throw InputError("'" + dir + "' exists and is not a study results folder (no study.state)");
-  }
-  if (!resuming) WriteTextFile(dir + "/config.ini", config.text);
-  state.config_hash = ConfigHash(config.text);
-  state.runs = runs;
-  state.shard = options.shard;
-  state.shards = options.shards;
-  state.status = "running";
-  state.jobs = jobs;
-  state.config_path = fs::absolute(config.path).lexically_normal().string();
-  if (!resuming || state.started.empty()) state.started = NowUtc();
+  const bool resuming = OpenResults(config, options, runs, jobs, &state);
   const double previous_wall = resuming ? state.wall_s : 0.0;
-  state.finished.clear();
-  state.files.clear();  // the files change from here on
-  WriteStudyState(dir, state);
-
-  // Finished runs: every filter x noise row present in all three files
-  // (study_integrity.h); keep only their rows. Damaged runs are run again.
-  const auto runs_cols = RunsColumns(config), steps_cols = StepsColumns(config);
-  std::set<std::pair<std::string, long>> finished;
-  {
-    const RunCoverage coverage = CheckRunCoverage(config, dir, runs, options.shard, options.shards);
-    finished = coverage.complete;
-    if (coverage.damaged > 0)
-      std::cerr << "estlab study: " << coverage.damaged << " finished run(s) in '" << dir
-                << "' have rows missing or extra (" << coverage.damage.front()
-                << "); running them again\n";
-    KeepFinished(dir + "/runs.csv", runs_cols, finished);
-    KeepFinished(dir + "/steps.csv", steps_cols, finished);
-    KeepFinished(dir + "/timing.csv", TimingColumns(config), finished);
-  }
-
-  struct Task {
-    int scenario, run;
-  };
-  std::vector<Task> tasks;
-  long total = 0;
-  for (size_t s = 0; s < config.scenarios.size(); ++s)
-    for (int i = 0; i < ScenarioRuns(config.scenarios[s], runs); ++i) {
-      if (i % options.shards != options.shard - 1) continue;
-      ++total;
-      if (!finished.count({config.scenarios[s].name, i})) tasks.push_back({int(s), i});
-    }
-
+  StudyRunSummary summary;
+  const std::vector<RunTask> tasks =
+      PendingRuns(config, options, runs, &summary.total_runs, &summary.resumed_runs);
   WriteTextFile(dir + "/manifest.json", StudyManifestJson(config, state));
 
-  StudyRunSummary summary;
-  // Tuned noise settings (a copy of the config carries the tuned Q/R), each
-  // saved in DIR/tuning/ as it is found and reused on resume.
-  // A complete folder (nothing to run, tuned.csv there) needs none.
+  // Tuned noise settings go into a copy of the config, each saved in
+  // DIR/tuning/ as it is found and reused on resume. A complete folder
+  // (nothing to run, tuned.csv there) needs none.
   StudyConfig tuned_config = config;
+  std::optional<StudyTunings> tunings;
   if (!tasks.empty() || !fs::exists(dir + "/tuned.csv")) {
-    StudyTuningOptions tuning;
-    tuning.dir = dir;
-    tuning.jobs = jobs;
-    tuning.progress = options.progress;
-    tuning.stop = options.stop;
-    const StudyTuningSummary t = TuneStudyNoise(&tuned_config, tuning);
-    summary.tunings = t.total;
-    summary.reused_tunings = t.reused;
-    if (t.interrupted) {  // stopped while tuning: no run started
-      summary.total_runs = total;
-      summary.resumed_runs = summary.finished_runs = long(finished.size());
-      summary.interrupted = true;
-      return Conclude(config, dir, previous_wall, wall_start, &state, &summary);
-    }
-    if (!t.csv.empty()) WriteTextFile(dir + "/tuned.csv", t.csv);
+    tunings.emplace(tuned_config, StudyTuningOptions{.dir = dir, .progress = options.progress});
+    tunings->ApplyReused(&tuned_config);
   }
-  if (fs::exists(dir + "/tuned.csv")) {  // this run's or, complete, the earlier one's
-    const CsvText tuned = ReadCsvText(dir + "/tuned.csv");
-    const int status = tuned.Column("status");
-    for (const auto& row : tuned.rows)
-      summary.failed_tunings +=
-          status >= 0 && size_t(status) < row.size() && row[status] == "failed";
-  }
-
   RunContext ctx;
   ctx.config = &tuned_config;
   ctx.dir = dir;
   ctx.every = StepMetricsEvery(config);
   ctx.keep.insert(config.study.keep_runs.begin(), config.study.keep_runs.end());
-  // The time-series folders, here rather than racing in the workers.
-  if (!ctx.keep.empty())
+  if (!ctx.keep.empty())  // the time-series folders, here rather than racing in the workers
     for (const auto& sc : config.scenarios)
       fs::create_directories(fs::path(dir) / "timeseries" / sc.name);
-
-  std::ofstream runs_file(dir + "/runs.csv", std::ios::app | std::ios::binary);
-  std::ofstream steps_file(dir + "/steps.csv", std::ios::app | std::ios::binary);
-  std::ofstream timing_file(dir + "/timing.csv", std::ios::app | std::ios::binary);
-  if (!runs_file || !steps_file || !timing_file)
-    throw InputError("cannot append to the run files in '" + dir + "'");
-
-  // Workers take task indices; the main thread writes results in task order.
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<std::optional<RunText>> results(tasks.size());
-  std::atomic<size_t> next{0};
-  std::atomic<bool> abort{false};
-  std::exception_ptr failure;
-  int workers_done = 0;
-  const int workers = std::max(1, std::min<int>(jobs, int(tasks.size())));
-  auto stop_requested = [&] { return abort.load() || (options.stop && options.stop->load() != 0); };
-  auto worker = [&] {
-    while (!stop_requested()) {
-      const size_t idx = next.fetch_add(1);
-      if (idx >= tasks.size()) break;
-      try {
-        RunText r = RunOne(ctx, tasks[idx].scenario, tasks[idx].run);
-        std::lock_guard<std::mutex> lock(mutex);
-        results[idx] = std::move(r);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!failure) failure = std::current_exception();
-        abort = true;
-      }
-      cv.notify_one();
-    }
-    std::lock_guard<std::mutex> lock(mutex);
-    ++workers_done;
-    cv.notify_one();
-  };
-  std::vector<std::thread> threads;
-  if (!tasks.empty())
-    for (int w = 0; w < workers; ++w) threads.emplace_back(worker);
-
-  summary.total_runs = total;
-  summary.resumed_runs = long(finished.size());
-  Progress progress(total, summary.resumed_runs, options.progress);
-  size_t written = 0;
-  long done = summary.resumed_runs;
-  try {
-    while (!tasks.empty()) {
-      std::vector<RunText> batch;
-      bool all_done;
-      {
-        std::unique_lock<std::mutex> lock(mutex);
-        cv.wait_for(lock, std::chrono::milliseconds(200), [&] {
-          return (written < results.size() && results[written]) || workers_done == workers;
-        });
-        while (written < results.size() && results[written]) {
-          batch.push_back(std::move(*results[written]));
-          results[written].reset();
-          ++written;
-        }
-        all_done = workers_done == workers;
-      }
-      for (const RunText& r : batch) {
-        // runs.csv last: a run is finished once its rows are there.
-        AppendOrThrow(steps_file, r.steps, dir + "/steps.csv");
-        AppendOrThrow(timing_file, r.timing, dir + "/timing.csv");
-        AppendOrThrow(runs_file, r.runs, dir + "/runs.csv");
-        summary.failed_filter_runs += r.failed;
-        ++done;
-      }
-      progress.Update(done, false);
-      if (all_done && batch.empty()) break;
-    }
-  } catch (...) {
-    abort = true;
-    for (auto& t : threads) t.join();
-    throw;
-  }
-  for (auto& t : threads) t.join();
-  if (failure) std::rethrow_exception(failure);
-  progress.Update(done, true);
-  runs_file.close();
-  steps_file.close();
-  timing_file.close();
-
-  summary.finished_runs = done;
-  summary.interrupted = done < total;
+  Progress progress(summary.total_runs, summary.resumed_runs, options.progress);
+  const long written = RunTasks(ctx, &tuned_config, tunings ? &*tunings : nullptr, tasks, jobs,
+                                options, &progress, &summary);
+  const bool tuned = RecordTunings(tunings ? &*tunings : nullptr, dir, &summary);
+  summary.finished_runs = summary.resumed_runs + written;
+  summary.interrupted = !tuned || summary.finished_runs < summary.total_runs;
+  progress.Update(summary.finished_runs, true);
   return Conclude(config, dir, previous_wall, wall_start, &state, &summary);
 }
 

@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -14,7 +13,6 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
-#include <thread>
 #include <vector>
 
 #include "src/core/hash.h"
@@ -296,74 +294,82 @@ TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, TuningProgres
 
 }  // namespace
 
-StudyTuningSummary TuneStudyNoise(StudyConfig* config, const StudyTuningOptions& options) {
-  StudyTuningSummary summary;
-  const uint64_t hash = ConfigHash(config->text);
+struct StudyTunings::State {
   std::vector<ComboKey> keys;
-  for (size_t s = 0; s < config->scenarios.size(); ++s)
-    for (size_t c = 0; c < config->scenarios[s].combos.size(); ++c) {
-      const Combo& cb = config->scenarios[s].combos[c];
+  std::vector<std::optional<TunedCombo>> results;  // per key, once tuned or reused
+  std::vector<size_t> pending;                     // keys still to tune
+  std::unique_ptr<TuningProgress> progress;
+};
+
+StudyTunings::StudyTunings(const StudyConfig& config, const StudyTuningOptions& options)
+    : options_(options), hash_(ConfigHash(config.text)), state_(std::make_unique<State>()) {
+  State& st = *state_;
+  for (size_t s = 0; s < config.scenarios.size(); ++s)
+    for (size_t c = 0; c < config.scenarios[s].combos.size(); ++c) {
+      const Combo& cb = config.scenarios[s].combos[c];
       if (cb.tune && !cb.tune_per_run)  // per run: tuned by the runner, in each run
-        keys.push_back({int(s), int(c), config->scenarios[s].name, config->filters[cb.filter].name,
-                        config->noises[cb.noise].name});
+        st.keys.push_back({int(s), int(c), config.scenarios[s].name, config.filters[cb.filter].name,
+                           config.noises[cb.noise].name});
     }
-  summary.total = int(keys.size());
-  if (keys.empty()) return summary;
-  std::vector<std::optional<TunedCombo>> results(keys.size());
-  std::vector<size_t> todo;
-  for (size_t j = 0; j < keys.size(); ++j) {
+  st.results.resize(st.keys.size());
+  int reused = 0;
+  for (size_t j = 0; j < st.keys.size(); ++j) {
     TunedCombo t;
-    if (!options.dir.empty() && LoadTuned(options.dir, hash, keys[j], &t)) {
-      results[j] = std::move(t);
-      ++summary.reused;
+    if (!options.dir.empty() && LoadTuned(options.dir, hash_, st.keys[j], &t)) {
+      st.results[j] = std::move(t);
+      ++reused;
     } else {
-      todo.push_back(j);
+      st.pending.push_back(j);
     }
   }
-  if (!options.dir.empty() && !todo.empty()) fs::create_directories(TuningFolder(options.dir));
-  if (options.progress && !todo.empty())
-    std::cerr << "estlab study: tuning Q/R of " << todo.size() << " 'tuned' noise setting(s)"
-              << ReusedNote(summary.reused, options.dir) << "...\n";
-  TuningProgress progress(summary.total, summary.reused, options.progress);
-  std::mutex mutex;
-  std::atomic<size_t> next{0};
-  std::exception_ptr error;
-  auto work = [&] {
-    for (size_t i;
-         !(options.stop && options.stop->load()) && (i = next.fetch_add(1)) < todo.size();) {
-      const ComboKey& key = keys[todo[i]];
-      const auto t0 = std::chrono::steady_clock::now();
-      try {
-        TunedCombo t = TuneOne(*config, key, &progress);
-        if (!options.dir.empty()) SaveTuned(options.dir, hash, key, t);
-        const double wall =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        progress.Finished(key.Label(), wall, t.failure.empty() ? "tuned" : "failed");
-        std::lock_guard<std::mutex> lock(mutex);
-        results[todo[i]] = std::move(t);
-      } catch (...) {  // a write error: stop the others, rethrow below
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!error) error = std::current_exception();
-        next = todo.size();
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 0; w < std::max(1, std::min<int>(options.jobs, int(todo.size()))); ++w)
-    threads.emplace_back(work);
-  for (auto& t : threads) t.join();
-  if (error) std::rethrow_exception(error);
+  if (!options.dir.empty() && !st.pending.empty())
+    fs::create_directories(TuningFolder(options.dir));
+  if (options.progress && !st.pending.empty())
+    std::cerr << "estlab study: tuning Q/R of " << st.pending.size() << " 'tuned' noise setting(s)"
+              << ReusedNote(reused, options.dir) << "...\n";
+  st.progress = std::make_unique<TuningProgress>(int(st.keys.size()), reused, options.progress);
+}
 
+StudyTunings::~StudyTunings() = default;
+
+size_t StudyTunings::Pending() const { return state_->pending.size(); }
+
+int StudyTunings::ScenarioOf(size_t i) const { return state_->keys[state_->pending[i]].s; }
+
+void StudyTunings::ApplyReused(StudyConfig* config) const {
+  const State& st = *state_;
+  for (size_t j = 0; j < st.keys.size(); ++j)
+    if (st.results[j]) Apply(*st.results[j], &config->scenarios[st.keys[j].s].combos[st.keys[j].c]);
+}
+
+void StudyTunings::Tune(size_t i, StudyConfig* config) {
+  State& st = *state_;
+  const size_t j = st.pending[i];
+  const ComboKey& key = st.keys[j];
+  const auto t0 = std::chrono::steady_clock::now();
+  TunedCombo t = TuneOne(*config, key, st.progress.get());
+  if (!options_.dir.empty()) SaveTuned(options_.dir, hash_, key, t);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.progress->Finished(key.Label(), wall, t.failure.empty() ? "tuned" : "failed");
+  Apply(t, &config->scenarios[key.s].combos[key.c]);
+  st.results[j] = std::move(t);
+}
+
+StudyTuningSummary StudyTunings::Summary() const {
+  const State& st = *state_;
+  StudyTuningSummary summary;
+  summary.total = int(st.keys.size());
+  summary.reused = summary.total - int(st.pending.size());
+  if (st.keys.empty()) return summary;
   summary.csv = FormatCsvRow(TunedColumns());
-  for (size_t j = 0; j < keys.size(); ++j) {
-    if (!results[j]) {
+  for (size_t j = 0; j < st.keys.size(); ++j) {
+    if (!st.results[j]) {
       summary.interrupted = true;
       continue;
     }
-    Apply(*results[j], &config->scenarios[keys[j].s].combos[keys[j].c]);
-    summary.csv += results[j]->row;
+    summary.csv += st.results[j]->row;
   }
-  for (size_t j : todo) summary.tuned += results[j] ? 1 : 0;
+  for (size_t j : st.pending) summary.tuned += st.results[j] ? 1 : 0;
   if (summary.interrupted) summary.csv.clear();
   return summary;
 }

@@ -13,13 +13,12 @@
 // Usage:
 //   StudyTuningOptions o;
 //   o.dir = "results/paper002";   // "" = nothing saved or reused
-//   o.jobs = 2;
-//   StudyTuningSummary t = TuneStudyNoise(&config, o);   // config's combos now tuned
-//   if (t.interrupted) ...;        // options.stop was set: some combos not tuned
+//   StudyTunings tunings(config, o);   // then, as tasks: tunings.Tune(i, &config)
 #ifndef ESTLAB_STUDIES_STUDY_TUNING_H_
 #define ESTLAB_STUDIES_STUDY_TUNING_H_
 
-#include <atomic>
+#include <cstdint>
+#include <memory>
 #include <string>
 
 #include "studies/study_config.h"
@@ -28,13 +27,9 @@ namespace estlab {
 
 struct StudyTuningOptions {
   std::string dir;  // the results folder; "" = nothing saved or reused
-  int jobs = 1;     // tunings run in parallel (each single-threaded)
   // Progress on stderr: one line per finished tuning, or a line rewritten
   // in place (with the running tuner's iteration) on a terminal.
   bool progress = false;
-  // When non-null and nonzero: start no new tuning; the running ones finish
-  // and are saved.
-  const std::atomic<int>* stop = nullptr;
 };
 
 struct StudyTuningSummary {
@@ -45,10 +40,36 @@ struct StudyTuningSummary {
   bool interrupted = false;
 };
 
-// Tunes every combo of `config` with tune = true (reusing DIR/tuning/), puts
-// the tuned Q/R and parameters into its spec, or its failure into
-// tune_failure. Deterministic whatever jobs is and however often it resumed.
-StudyTuningSummary TuneStudyNoise(StudyConfig* config, const StudyTuningOptions& options);
+// The `tuned` combos of a study (tune = true, not per run), as tasks of the
+// study's task pool (src/core/task_pool.h): each pending one is a task, and
+// the runs of its scenario wait for it.
+//   StudyTunings tunings(config, options);  // finds them; loads DIR/tuning/
+//   tunings.ApplyReused(&config);           // before any run
+//   tunings.Tune(i, &config);               // pending i: tune, save, apply
+//   StudyTuningSummary t = tunings.Summary();
+// Tune(i) for distinct i may run at once: each writes only its own combo
+// (config->scenarios[s].combos[c]) and its own result. Deterministic
+// whatever the order, the jobs and however often the study resumed.
+class StudyTunings {
+ public:
+  StudyTunings(const StudyConfig& config, const StudyTuningOptions& options);
+  ~StudyTunings();
+  size_t Pending() const;          // tunings still to run
+  int ScenarioOf(size_t i) const;  // the scenario of pending tuning i
+  void ApplyReused(StudyConfig* config) const;
+  // Tunes pending combo i, saves it in DIR/tuning/, and puts the tuned Q/R
+  // and parameters into its spec (or its failure into tune_failure).
+  void Tune(size_t i, StudyConfig* config);
+  // tuned.csv and the counts; interrupted (no csv) when a pending one did
+  // not run.
+  StudyTuningSummary Summary() const;
+
+ private:
+  struct State;
+  StudyTuningOptions options_;
+  uint64_t hash_;
+  std::unique_ptr<State> state_;
+};
 
 // The folder of the saved results, DIR/tuning.
 std::string TuningFolder(const std::string& dir);
