@@ -635,16 +635,20 @@ long RunTasks(const RunContext& ctx, StudyConfig* tuned, StudyTunings* tunings,
       if (tunings->ScenarioOf(i) == runs[r].scenario) after[n_tune + r].push_back(i);
   std::vector<std::optional<RunText>> results(runs.size());
   RunFiles files(ctx.dir);
-  const size_t n_tasks = after.size();  // before `after` moves into the pool
+  const size_t n_tasks = after.size();
+  std::vector<double> wall(n_tasks, 0.0);  // each task's own wall time
   TaskPool pool(jobs, n_tasks,
                 [&](size_t task, int) {
+                  const auto t0 = std::chrono::steady_clock::now();
                   if (task < n_tune)
                     tunings->Tune(task, tuned);
                   else
                     results[task - n_tune] =
                         RunOne(ctx, runs[task - n_tune].scenario, runs[task - n_tune].run);
+                  wall[task] =
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 },
-                {.after = std::move(after), .order = {}, .stop = options.stop});
+                {.after = after, .order = {}, .stop = options.stop});
   long written = 0;
   for (size_t r = 0; r < runs.size(); ++r) {
     while (!pool.WaitFor(n_tune + r, std::chrono::milliseconds(200)) && !pool.Ended())
@@ -656,6 +660,12 @@ long RunTasks(const RunContext& ctx, StudyConfig* tuned, StudyTunings* tunings,
     progress->Update(summary->resumed_runs + ++written, false);
   }
   pool.Join();
+  for (size_t task = 0; task < n_tasks; ++task) {
+    double chain = 0.0;  // the longest chain ending in this task (one level of waiting)
+    for (size_t i : after[task]) chain = std::max(chain, wall[i]);
+    summary->task_work_s += wall[task];
+    summary->critical_path_s = std::max(summary->critical_path_s, chain + wall[task]);
+  }
   return written;
 }
 

@@ -59,6 +59,13 @@ struct StudyRunSummary {
   int failed_tunings = 0;       // of them status "failed" in tuned.csv (exit 1)
   bool interrupted = false;
   double wall_s = 0.0;
+  // The task pool's work (src/core/task_pool.h) in this process: the sum of
+  // the tunings' and runs' own wall times, and its critical path, the
+  // longest chain (a tuning, then a run that waits for it). No --jobs
+  // finishes faster than critical_path_s, so task_work_s /
+  // max(critical_path_s, task_work_s / J) bounds the speed-up at J jobs.
+  double task_work_s = 0.0;
+  double critical_path_s = 0.0;
   std::string report;  // report.md text when complete
 };
 

@@ -145,6 +145,7 @@ std::string SummaryJson(const std::string& dir, const StudyConfig& config,
   j.Key("resumed_runs").Value(sum.resumed_runs);
   j.Key("failed_filter_runs").Value(sum.failed_filter_runs);
   j.Key("failed_tunings").Value(long(sum.failed_tunings)).Key("wall_s").Value(sum.wall_s);
+  j.Key("task_work_s").Value(sum.task_work_s).Key("critical_path_s").Value(sum.critical_path_s);
   j.Key("summary").BeginArray();
   if (!sum.interrupted) {
     const CsvText s = ReadCsvText(dir + "/summary.csv");
@@ -351,6 +352,9 @@ int RunStudyCommand(const std::vector<std::string>& args) {
     std::cout << "\n" << sum.finished_runs << " runs";
     if (sum.resumed_runs) std::cout << " (" << sum.resumed_runs << " from before)";
     std::cout << " in " << std::setprecision(3) << sum.wall_s << " s";
+    if (sum.critical_path_s > 0)
+      std::cout << " (tasks: " << sum.task_work_s << " s of work, critical path "
+                << sum.critical_path_s << " s)";
     if (sum.failed_filter_runs)
       std::cout << "; " << sum.failed_filter_runs << " filter runs failed (status in runs.csv)";
     const bool identification = std::filesystem::exists(options.out_dir + "/identification.csv");
