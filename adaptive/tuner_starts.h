@@ -6,14 +6,11 @@
 #define ESTLAB_ADAPTIVE_TUNER_STARTS_H_
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <memory>
 #include <mutex>
 #include <numeric>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -21,6 +18,7 @@
 #include "adaptive/tuner_drivers.h"
 #include "adaptive/tuner_objective.h"
 #include "src/core/random.h"
+#include "src/core/task_pool.h"
 
 namespace estlab {
 namespace tuner_internal {
@@ -237,15 +235,18 @@ TuneStart RunStart(const Objective<Model, Meas>& objective, const TunerOptions& 
   return st;
 }
 
-// Every start, on options.jobs threads: thread 0 uses `objective`, the others
-// each their own likelihood (CVODES solvers are per likelihood). A start's
-// result depends only on its point, so not on jobs. Progress is serialised.
+// Every start, a task of one pool (src/core/task_pool.h) of options.jobs
+// workers: worker 0 uses `objective`, the others each their own likelihood
+// (CVODES solvers are per likelihood), made on the worker's first start. A
+// start's result depends only on its point, so not on jobs. Progress is
+// serialised. A start that throws stops the others; its exception is
+// rethrown.
 template <class Model, class Meas>
 void RunStarts(const Objective<Model, Meas>& objective, const FilterSpec& spec,
                const TunerOptions& options, const std::vector<FilterData>& datasets,
                const std::vector<std::vector<double>>& points, const std::vector<double>& lower,
                const std::vector<double>& upper, std::vector<TuneStart>* starts) {
-  const int n = int(points.size());
+  const size_t n = points.size();
   starts->assign(n, TuneStart{});
   std::mutex progress_mutex;
   TunerOptions o = options;
@@ -254,31 +255,20 @@ void RunStarts(const Objective<Model, Meas>& objective, const FilterSpec& spec,
       std::lock_guard<std::mutex> lock(progress_mutex);
       options.progress(p);
     };
-  std::atomic<int> next{0};
-  std::vector<std::exception_ptr> errors(std::min(o.jobs, n));
-  auto work = [&](int w) {
-    try {
-      std::unique_ptr<InnovationLikelihood<Model, Meas>> own;
-      std::unique_ptr<Objective<Model, Meas>> own_objective;
-      if (w > 0) {
-        own = std::make_unique<InnovationLikelihood<Model, Meas>>(spec, o, datasets);
-        own_objective = std::make_unique<Objective<Model, Meas>>(*own);
-      }
-      const Objective<Model, Meas>& obj = w > 0 ? *own_objective : objective;
-      for (int s; (s = next++) < n;) {
-        const TuneProgress where{.phase = "start", .start = s + 1, .starts = n, .objective = "NLL"};
-        (*starts)[s] = RunStart(obj, o, points[s], lower, upper, where);
-      }
-    } catch (...) {
-      errors[w] = std::current_exception();
+  const int jobs = std::max(1, std::min(o.jobs, int(n)));
+  std::vector<std::unique_ptr<InnovationLikelihood<Model, Meas>>> own(static_cast<size_t>(jobs));
+  std::vector<std::unique_ptr<Objective<Model, Meas>>> own_objective(static_cast<size_t>(jobs));
+  TaskPool pool(jobs, n, [&](size_t s, int w) {
+    if (w > 0 && !own[size_t(w)]) {
+      own[size_t(w)] = std::make_unique<InnovationLikelihood<Model, Meas>>(spec, o, datasets);
+      own_objective[size_t(w)] = std::make_unique<Objective<Model, Meas>>(*own[size_t(w)]);
     }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 1; w < int(errors.size()); ++w) threads.emplace_back(work, w);
-  work(0);
-  for (auto& t : threads) t.join();
-  for (const auto& e : errors)
-    if (e) std::rethrow_exception(e);
+    const Objective<Model, Meas>& obj = w > 0 ? *own_objective[size_t(w)] : objective;
+    const TuneProgress where{
+        .phase = "start", .start = int(s) + 1, .starts = int(n), .objective = "NLL"};
+    (*starts)[s] = RunStart(obj, o, points[s], lower, upper, where);
+  });
+  pool.Join();
 }
 
 // Picks the best admissible start (lowest NLL; the first on a tie) and

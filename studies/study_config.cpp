@@ -54,6 +54,236 @@ StudySettings ParseStudy(const SectionValues& v) {
   return s;
 }
 
+namespace {
+
+// The sections of a study by kind, and the values of its filter and noise
+// sections (kept for the combinations).
+struct ConfigParts {
+  const Section* study = nullptr;
+  const Section* report = nullptr;
+  std::vector<const Section*> scenario_secs, filter_secs, noise_secs;
+  std::vector<SectionValues> filter_values, noise_values;
+};
+
+// Sorts the sections by kind; a study needs a [study] section and at least
+// one scenario, filter and noise section.
+ConfigParts GroupSections(const std::vector<Section>& sections, const ConfigErrors& err) {
+  ConfigParts p;
+  for (const Section& s : sections) {
+    if (s.kind == "study") p.study = &s;
+    if (s.kind == "report") p.report = &s;
+    if (s.kind == "scenario") p.scenario_secs.push_back(&s);
+    if (s.kind == "filter") p.filter_secs.push_back(&s);
+    if (s.kind == "noise") p.noise_secs.push_back(&s);
+  }
+  if (!p.study) err.Fail(1, "no [study] section");
+  if (p.scenario_secs.empty()) err.Fail(p.study->line, "no [scenario.NAME] section");
+  if (p.filter_secs.empty()) err.Fail(p.study->line, "no [filter.NAME] section");
+  if (p.noise_secs.empty()) err.Fail(p.study->line, "no [noise.NAME] section");
+  return p;
+}
+
+// One [filter.NAME] section: its kind (required), its description (by
+// default the kind and its keys) and the scenarios it applies to.
+FilterConfig ParseFilter(const SectionValues& v) {
+  const ConfigErrors& err = v.errors();
+  FilterConfig f;
+  f.name = v.section().name;
+  if (!v.Has("kind"))
+    v.FailSection(
+        "'kind' is required (kf, ekf, iekf, ukf, ckf, ghkf, pf, or a smoother: rts, erts, "
+        "iekf-rts, urts, ckf-rts, ghkf-rts, pf-bs)");
+  f.kind = v.Get("kind")->text;
+  Checked(*v.Get("kind"), err, [](const std::string& t) {
+    const std::string filter = FilterOfSmoother(t);
+    return ParseFilterKind(filter.empty() ? t : filter);
+  });
+  f.description = f.kind;
+  for (const Entry& e : v.section().entries) {
+    if (e.key == "kind" || e.key == "scenarios") continue;
+    if (e.key == "description") {
+      f.description = e.value;
+      break;
+    }
+    f.description += " " + e.key + "=" + e.value;
+  }
+  if (v.Has("scenarios"))
+    f.scenarios = Checked(*v.Get("scenarios"), err,
+                          [](const std::string& t) { return ParseNameList(t, "scenarios"); });
+  return f;
+}
+
+// The role of a [noise.NAME] section: tuned, oracle or hand from its q and
+// r, unless its `role` key names one (or other).
+std::string NoiseRole(const SectionValues& v) {
+  auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
+  std::string role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params") ? "tuned"
+                     : text_of("q") == "oracle" && text_of("r") == "oracle" ? "oracle"
+                                                                            : "hand";
+  if (v.Has("role")) {
+    role = v.Get("role")->text;
+    if (role != "hand" && role != "tuned" && role != "oracle" && role != "other")
+      v.Fail("role", "expected hand, tuned, oracle or other, got '" + role + "'");
+  }
+  return role;
+}
+
+// One [noise.NAME] section: exactly one Q and one R key, its description,
+// role, tuner settings, and the scenarios and filters (of `filters`) it
+// applies to.
+NoiseConfig ParseNoise(const SectionValues& v, const std::vector<FilterConfig>& filters) {
+  const ConfigErrors& err = v.errors();
+  NoiseConfig nc;
+  nc.name = v.section().name;
+  const int nq = int(v.Has("q")) + int(v.Has("q-diag")) + int(v.Has("q-white-accel"));
+  const int nr = int(v.Has("r")) + int(v.Has("r-diag"));
+  if (nq != 1)
+    v.FailSection(
+        "give exactly one of q, q-diag, q-white-accel (q = oracle: the truth's process "
+        "noise; q = tuned: the likelihood tuner)");
+  if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
+  nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
+  nc.role = NoiseRole(v);
+  if (v.Has("tune-estimator")) {
+    nc.estimator = v.Get("tune-estimator")->text;  // the estimator table's name
+    Checked(*v.Get("tune-estimator"), err, [](const std::string& t) {
+      return ParseEstimator(t, "tune-estimator", /*studies_only=*/true);
+    });
+  }
+  nc.init_scale = v.Has("init-scale") ? v.Get("init-scale")->text : std::string();
+  if (v.Has("tune-per-run"))
+    nc.per_run = Checked(*v.Get("tune-per-run"), err,
+                         [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
+  if (v.Has("scenarios"))
+    nc.scenarios = Checked(*v.Get("scenarios"), err,
+                           [](const std::string& t) { return ParseNameList(t, "scenarios"); });
+  if (v.Has("filters")) {
+    nc.filters = Checked(*v.Get("filters"), err,
+                         [](const std::string& t) { return ParseNameList(t, "filters"); });
+    for (const auto& name : nc.filters) {
+      bool found = false;
+      for (const auto& f : filters) found |= f.name == name;
+      if (!found) v.Fail("filters", "no [filter." + name + "]");
+    }
+  }
+  return nc;
+}
+
+// Fails at the `scenarios` key of `v` unless each of `names` has a
+// [scenario.NAME] section.
+void CheckScenariosExist(const std::vector<std::string>& names,
+                         const std::vector<const Section*>& scenario_secs, const SectionValues& v) {
+  for (const auto& name : names) {
+    bool found = false;
+    for (const Section* s : scenario_secs) found |= s->name == name;
+    if (!found) v.Fail("scenarios", "no [scenario." + name + "]");
+  }
+}
+
+// Filters and noise settings, into c->filters and c->noises, with their
+// values kept in *p; then the scenarios they name are checked.
+void ParseFiltersAndNoises(const po::variables_map& vm, const ConfigErrors& err, ConfigParts* p,
+                           StudyConfig* c) {
+  for (const Section* s : p->filter_secs) {
+    p->filter_values.emplace_back(*s, vm, err);
+    c->filters.push_back(ParseFilter(p->filter_values.back()));
+  }
+  for (const Section* s : p->noise_secs) {
+    p->noise_values.emplace_back(*s, vm, err);
+    c->noises.push_back(ParseNoise(p->noise_values.back(), c->filters));
+  }
+  for (size_t i = 0; i < p->filter_secs.size(); ++i)
+    CheckScenariosExist(c->filters[i].scenarios, p->scenario_secs, p->filter_values[i]);
+  for (size_t i = 0; i < p->noise_secs.size(); ++i)
+    CheckScenariosExist(c->noises[i].scenarios, p->scenario_secs, p->noise_values[i]);
+}
+
+// Appends `name` to `names` unless it is there.
+void AddUnique(const std::string& name, std::vector<std::string>* names) {
+  if (std::find(names->begin(), names->end(), name) == names->end()) names->push_back(name);
+}
+
+// The filter x noise combinations that apply to the scenario `base` (its
+// section's NAME), into sc->combos; a combination tuned per run makes the
+// study an identification, with the scenario's outputs.
+void AddCombos(const std::string& base, const SectionValues& v, const ConfigParts& p,
+               const ConfigErrors& err, ScenarioConfig* sc, StudyConfig* c) {
+  for (size_t fi = 0; fi < c->filters.size(); ++fi) {
+    const auto& fs = c->filters[fi].scenarios;
+    if (!fs.empty() && std::find(fs.begin(), fs.end(), base) == fs.end()) continue;
+    for (size_t ni = 0; ni < c->noises.size(); ++ni) {
+      const auto& ns = c->noises[ni].scenarios;
+      if (!ns.empty() && std::find(ns.begin(), ns.end(), base) == ns.end()) continue;
+      const auto& nf = c->noises[ni].filters;
+      if (!nf.empty() && std::find(nf.begin(), nf.end(), c->filters[fi].name) == nf.end()) continue;
+      sc->combos.push_back(
+          BuildCombo(*sc, v, int(fi), p.filter_values[fi], int(ni), p.noise_values[ni], err));
+      if (sc->combos.back().tune_per_run) {
+        c->identification = true;
+        for (const auto& o : sc->model->FindMeasurement(sc->truth.measurement).outputs)
+          AddUnique(o, &c->identification_outputs);
+      }
+    }
+  }
+}
+
+// One expanded scenario of [scenario.NAME] `s` with its '|' `choices`,
+// named NAME.LABEL..., its columns and combinations added to *c.
+void AddScenario(const Section& s, const SectionValues& v,
+                 const std::vector<std::pair<std::string, std::string>>& choices,
+                 const ConfigParts& p, const ConfigErrors& err, std::set<std::string>* names,
+                 StudyConfig* c) {
+  ScenarioConfig sc = BuildScenario(v, err);
+  sc.choices = choices;
+  sc.name = s.name;
+  for (const auto& ch : choices) sc.name += "." + ch.second;
+  if (!names->insert(sc.name).second)
+    err.Fail(s.line, "scenario name '" + sc.name + "' occurs twice");
+  for (const auto& st : sc.model->states) AddUnique(st, &c->state_columns);
+  if (sc.recorded)
+    for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
+      AddUnique(o, &c->output_columns);
+  AddCombos(s.name, v, p, err, &sc, c);
+  if (sc.combos.empty())
+    err.Fail(s.line, "[" + s.full + "]: no filter and noise setting applies to it");
+  if (sc.model->run_filter == nullptr)
+    err.Fail(s.line, "model '" + sc.model->name + "' has no filter runner in this build");
+  c->scenarios.push_back(std::move(sc));
+}
+
+// Scenarios, expanded, each with its filter x noise combinations.
+void ParseScenarios(const po::variables_map& vm, const ConfigErrors& err, const ConfigParts& p,
+                    StudyConfig* c) {
+  std::set<std::string> names;
+  std::vector<std::unique_ptr<Section>> expanded_storage;
+  for (const Section* s : p.scenario_secs) {
+    // Values come from Program_options for the plain keys; '|' lists are
+    // expanded from the same text.
+    Section merged = *s;
+    for (Entry& e : merged.entries) {
+      const std::string full = s->full + "." + e.key;
+      if (vm.count(full)) e.value = vm[full].as<std::string>();
+    }
+    for (auto& [sec, choices] : ExpandScenario(merged, err)) {
+      expanded_storage.push_back(std::make_unique<Section>(sec));
+      const Section& es = *expanded_storage.back();
+      const SectionValues v(es, po::variables_map(), err);
+      AddScenario(*s, v, choices, p, err, &names, c);
+    }
+  }
+}
+
+// Each run that keep-runs names must be < runs.
+void CheckKeepRuns(const StudyConfig& c, const Section& study, const ConfigErrors& err) {
+  for (int k : c.study.keep_runs)
+    if (k >= c.study.runs && study.Find("keep-runs"))
+      err.Fail(study.Find("keep-runs")->line, "[study] keep-runs: run " + std::to_string(k) +
+                                                  " >= runs (" + std::to_string(c.study.runs) +
+                                                  "); runs are numbered from 0");
+}
+
+}  // namespace
+
 }  // namespace study_config
 
 using namespace study_config;
@@ -66,173 +296,12 @@ StudyConfig ParseStudyConfig(const std::string& text, const std::string& path) {
   StudyConfig c;
   c.path = path;
   c.text = text;
-  const Section* study = nullptr;
-  const Section* report = nullptr;
-  std::vector<const Section*> scenario_secs, filter_secs, noise_secs;
-  for (const Section& s : sections) {
-    if (s.kind == "study") study = &s;
-    if (s.kind == "report") report = &s;
-    if (s.kind == "scenario") scenario_secs.push_back(&s);
-    if (s.kind == "filter") filter_secs.push_back(&s);
-    if (s.kind == "noise") noise_secs.push_back(&s);
-  }
-  if (!study) err.Fail(1, "no [study] section");
-  if (scenario_secs.empty()) err.Fail(study->line, "no [scenario.NAME] section");
-  if (filter_secs.empty()) err.Fail(study->line, "no [filter.NAME] section");
-  if (noise_secs.empty()) err.Fail(study->line, "no [noise.NAME] section");
-  c.study = ParseStudy(SectionValues(*study, vm, err));
-
-  // Filters and noise settings.
-  std::vector<SectionValues> filter_values, noise_values;
-  for (const Section* s : filter_secs) {
-    filter_values.emplace_back(*s, vm, err);
-    const SectionValues& v = filter_values.back();
-    FilterConfig f;
-    f.name = s->name;
-    if (!v.Has("kind"))
-      v.FailSection(
-          "'kind' is required (kf, ekf, iekf, ukf, ckf, ghkf, pf, or a smoother: rts, erts, "
-          "iekf-rts, urts, ckf-rts, ghkf-rts, pf-bs)");
-    f.kind = v.Get("kind")->text;
-    Checked(*v.Get("kind"), err, [](const std::string& t) {
-      const std::string filter = FilterOfSmoother(t);
-      return ParseFilterKind(filter.empty() ? t : filter);
-    });
-    f.description = f.kind;
-    for (const Entry& e : s->entries) {
-      if (e.key == "kind" || e.key == "scenarios") continue;
-      if (e.key == "description") {
-        f.description = e.value;
-        break;
-      }
-      f.description += " " + e.key + "=" + e.value;
-    }
-    if (v.Has("scenarios"))
-      f.scenarios = Checked(*v.Get("scenarios"), err,
-                            [](const std::string& t) { return ParseNameList(t, "scenarios"); });
-    c.filters.push_back(f);
-  }
-  for (const Section* s : noise_secs) {
-    noise_values.emplace_back(*s, vm, err);
-    const SectionValues& v = noise_values.back();
-    NoiseConfig nc;
-    nc.name = s->name;
-    const int nq = int(v.Has("q")) + int(v.Has("q-diag")) + int(v.Has("q-white-accel"));
-    const int nr = int(v.Has("r")) + int(v.Has("r-diag"));
-    if (nq != 1)
-      v.FailSection(
-          "give exactly one of q, q-diag, q-white-accel (q = oracle: the truth's process "
-          "noise; q = tuned: the likelihood tuner)");
-    if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
-    nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
-    auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
-    nc.role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params") ? "tuned"
-              : text_of("q") == "oracle" && text_of("r") == "oracle"                ? "oracle"
-                                                                                    : "hand";
-    if (v.Has("role")) {
-      nc.role = v.Get("role")->text;
-      if (nc.role != "hand" && nc.role != "tuned" && nc.role != "oracle" && nc.role != "other")
-        v.Fail("role", "expected hand, tuned, oracle or other, got '" + nc.role + "'");
-    }
-    if (v.Has("tune-estimator")) {
-      nc.estimator = v.Get("tune-estimator")->text;  // the estimator table's name
-      Checked(*v.Get("tune-estimator"), err, [](const std::string& t) {
-        return ParseEstimator(t, "tune-estimator", /*studies_only=*/true);
-      });
-    }
-    nc.init_scale = text_of("init-scale");
-    if (v.Has("tune-per-run"))
-      nc.per_run = Checked(*v.Get("tune-per-run"), err,
-                           [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
-    if (v.Has("scenarios"))
-      nc.scenarios = Checked(*v.Get("scenarios"), err,
-                             [](const std::string& t) { return ParseNameList(t, "scenarios"); });
-    if (v.Has("filters")) {
-      nc.filters = Checked(*v.Get("filters"), err,
-                           [](const std::string& t) { return ParseNameList(t, "filters"); });
-      for (const auto& name : nc.filters) {
-        bool found = false;
-        for (const auto& f : c.filters) found |= f.name == name;
-        if (!found) v.Fail("filters", "no [filter." + name + "]");
-      }
-    }
-    c.noises.push_back(nc);
-  }
-  for (size_t i = 0; i < filter_secs.size(); ++i)
-    for (const auto& name : c.filters[i].scenarios) {
-      bool found = false;
-      for (const Section* s : scenario_secs) found |= s->name == name;
-      if (!found) filter_values[i].Fail("scenarios", "no [scenario." + name + "]");
-    }
-  for (size_t i = 0; i < noise_secs.size(); ++i)
-    for (const auto& name : c.noises[i].scenarios) {
-      bool found = false;
-      for (const Section* s : scenario_secs) found |= s->name == name;
-      if (!found) noise_values[i].Fail("scenarios", "no [scenario." + name + "]");
-    }
-
-  // Scenarios, expanded, each with its filter x noise combinations.
-  std::set<std::string> names;
-  std::vector<std::unique_ptr<Section>> expanded_storage;
-  for (const Section* s : scenario_secs) {
-    // Values come from Program_options for the plain keys; '|' lists are
-    // expanded from the same text.
-    Section merged = *s;
-    for (Entry& e : merged.entries) {
-      const std::string full = s->full + "." + e.key;
-      if (vm.count(full)) e.value = vm[full].as<std::string>();
-    }
-    for (auto& [sec, choices] : ExpandScenario(merged, err)) {
-      expanded_storage.push_back(std::make_unique<Section>(sec));
-      const Section& es = *expanded_storage.back();
-      const SectionValues v(es, po::variables_map(), err);
-      ScenarioConfig sc = BuildScenario(v, err);
-      sc.choices = choices;
-      sc.name = s->name;
-      for (const auto& ch : choices) sc.name += "." + ch.second;
-      if (!names.insert(sc.name).second)
-        err.Fail(s->line, "scenario name '" + sc.name + "' occurs twice");
-      for (const auto& st : sc.model->states)
-        if (std::find(c.state_columns.begin(), c.state_columns.end(), st) == c.state_columns.end())
-          c.state_columns.push_back(st);
-      if (sc.recorded)
-        for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
-          if (std::find(c.output_columns.begin(), c.output_columns.end(), o) ==
-              c.output_columns.end())
-            c.output_columns.push_back(o);
-      for (size_t fi = 0; fi < c.filters.size(); ++fi) {
-        const auto& fs = c.filters[fi].scenarios;
-        if (!fs.empty() && std::find(fs.begin(), fs.end(), s->name) == fs.end()) continue;
-        for (size_t ni = 0; ni < c.noises.size(); ++ni) {
-          const auto& ns = c.noises[ni].scenarios;
-          if (!ns.empty() && std::find(ns.begin(), ns.end(), s->name) == ns.end()) continue;
-          const auto& nf = c.noises[ni].filters;
-          if (!nf.empty() && std::find(nf.begin(), nf.end(), c.filters[fi].name) == nf.end())
-            continue;
-          sc.combos.push_back(
-              BuildCombo(sc, v, int(fi), filter_values[fi], int(ni), noise_values[ni], err));
-          if (sc.combos.back().tune_per_run) {
-            c.identification = true;
-            for (const auto& o : sc.model->FindMeasurement(sc.truth.measurement).outputs)
-              if (std::find(c.identification_outputs.begin(), c.identification_outputs.end(), o) ==
-                  c.identification_outputs.end())
-                c.identification_outputs.push_back(o);
-          }
-        }
-      }
-      if (sc.combos.empty())
-        err.Fail(s->line, "[" + s->full + "]: no filter and noise setting applies to it");
-      if (sc.model->run_filter == nullptr)
-        err.Fail(s->line, "model '" + sc.model->name + "' has no filter runner in this build");
-      c.scenarios.push_back(std::move(sc));
-    }
-  }
-  if (report) ParseReport(*report, vm, &c, err);
-  for (int k : c.study.keep_runs)
-    if (k >= c.study.runs && study->Find("keep-runs"))
-      err.Fail(study->Find("keep-runs")->line, "[study] keep-runs: run " + std::to_string(k) +
-                                                   " >= runs (" + std::to_string(c.study.runs) +
-                                                   "); runs are numbered from 0");
+  ConfigParts p = GroupSections(sections, err);
+  c.study = ParseStudy(SectionValues(*p.study, vm, err));
+  ParseFiltersAndNoises(vm, err, &p, &c);
+  ParseScenarios(vm, err, p, &c);
+  if (p.report) ParseReport(*p.report, vm, &c, err);
+  CheckKeepRuns(c, *p.study, err);
   return c;
 }
 

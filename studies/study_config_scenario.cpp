@@ -76,79 +76,87 @@ void SetScenarioInput(const SectionValues& v, const Value& value, const ConfigEr
   sc->truth_description += ", input " + Trim(value.text);
 }
 
-}  // namespace
-
-ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
-  ScenarioConfig sc;
-  sc.section = v.section().full;
-  auto get = [&](const std::string& key) { return v.Get(key); };
-  auto text_or = [&](const std::string& key, const std::string& fallback) {
-    return v.Has(key) ? v.Get(key)->text : fallback;
-  };
+// The model of the scenario (the required `model` key), found by name or
+// compiled from its file.
+void SetScenarioModel(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
   if (!v.Has("model")) v.FailSection("'model' is required (see 'estlab list')");
   // A model file's path is relative to the config file; made absolute, so
   // that the study and a later `estlab figures` (which reads the results
   // folder's copy of the config) name it alike and share its compiled library.
-  sc.model_source = get("model")->text;
-  if (IsModelPath(sc.model_source) && !fs::path(sc.model_source).is_absolute())
-    sc.model_source = fs::absolute(fs::path(err.path()).parent_path() / sc.model_source)
-                          .lexically_normal()
-                          .string();
-  sc.model =
-      Checked(*get("model"), err, [&](const std::string&) { return &FindModel(sc.model_source); });
-  const ModelEntry& model = *sc.model;
-  const int n = int(model.states.size());
-  SimulationSpec& truth = sc.truth;
+  sc->model_source = v.Get("model")->text;
+  if (IsModelPath(sc->model_source) && !fs::path(sc->model_source).is_absolute())
+    sc->model_source = fs::absolute(fs::path(err.path()).parent_path() / sc->model_source)
+                           .lexically_normal()
+                           .string();
+  sc->model = Checked(*v.Get("model"), err,
+                      [&](const std::string&) { return &FindModel(sc->model_source); });
+}
 
+// A state of the model given as `name = value, ...` under `key` (x0, prior-x0).
+std::vector<double> ParseState(const SectionValues& v, const ConfigErrors& err,
+                               const ModelEntry& model, const std::string& key) {
+  return Checked(*v.Get(key), err, [&](const std::string& t) {
+    return model.ResolveState(ParseAssignments({t}, key), key);
+  });
+}
+
+// The truth's parameters, then (after checking that the keys of the other
+// kind of run are absent) its initial state and, when simulated, dt and steps.
+void SetTruthStart(const SectionValues& v, const ConfigErrors& err, bool recorded,
+                   ScenarioConfig* sc) {
+  const ModelEntry& model = *sc->model;
+  SimulationSpec& truth = sc->truth;
   if (v.Has("params")) {
-    truth.params = Checked(*get("params"), err, [&](const std::string& t) {
+    truth.params = Checked(*v.Get("params"), err, [&](const std::string& t) {
       return model.ResolveParams(ParseAssignments({t}, "params"));
     });
   } else {
     truth.params = model.ResolveParams({});
   }
-  auto parse_state = [&](const std::string& key) {
-    return Checked(*get(key), err, [&](const std::string& t) {
-      return model.ResolveState(ParseAssignments({t}, key), key);
-    });
-  };
   // Recorded runs: nothing is simulated, so no simulation key applies.
-  const bool recorded = v.Has("data");
   for (const auto& key : recorded ? kSimulationKeys : kRecordedKeys) {
     if (v.Has(key))
       v.Fail(key, recorded ? "not allowed with data (recorded runs are not simulated)"
                            : "applies only with data = FILES (recorded runs)");
   }
-  truth.x0 = v.Has("x0") ? parse_state("x0") : std::vector<double>(n, 0.0);
+  truth.x0 =
+      v.Has("x0") ? ParseState(v, err, model, "x0") : std::vector<double>(model.states.size(), 0.0);
   if (v.Has("truth-x0")) {
-    const std::string mode = get("truth-x0")->text;
+    const std::string mode = v.Get("truth-x0")->text;
     if (mode != "fixed" && mode != "sample")
       v.Fail("truth-x0", "expected fixed or sample, got '" + mode + "'");
-    sc.sample_x0 = mode == "sample";
+    sc->sample_x0 = mode == "sample";
   }
   if (!recorded) {
     if (!v.Has("dt")) v.FailSection("'dt' is required");
-    truth.dt = Checked(*get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
+    truth.dt =
+        Checked(*v.Get("dt"), err, [](const std::string& t) { return ParseNumber(t, "dt"); });
     if (!(truth.dt > 0)) v.Fail("dt", "must be > 0");
     if (!v.Has("steps")) v.FailSection("'steps' is required");
-    sc.steps = Checked(*get("steps"), err,
-                       [](const std::string& t) { return ParseCount(t, "steps", 1, kMaxSteps); });
-    truth.t_end = sc.steps * truth.dt;
+    sc->steps = Checked(*v.Get("steps"), err,
+                        [](const std::string& t) { return ParseCount(t, "steps", 1, kMaxSteps); });
+    truth.t_end = sc->steps * truth.dt;
   }
+}
 
-  TransitionOptions& tr = truth.transition;
-  tr.integrator =
-      Checked(Value{text_or("truth-integrator", model.discrete_time ? "discrete" : "cvodes"),
-                    v.Has("truth-integrator") ? get("truth-integrator")->line : v.section().line,
-                    "[" + sc.section + "] truth-integrator"},
-              err, [&](const std::string& t) {
-                const Integrator i = ParseIntegrator(t);
-                const std::string e = model.CheckIntegrator(i);
-                if (!e.empty()) throw InputError(e);
-                return i;
-              });
+// The truth's integrator (by default the model's own: discrete or cvodes)
+// and its CVODES method, the only keys of the transition that are words.
+void SetTruthIntegrator(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
+  const ModelEntry& model = *sc->model;
+  TransitionOptions& tr = sc->truth.transition;
+  const bool has = v.Has("truth-integrator");
+  tr.integrator = Checked(
+      Value{has ? v.Get("truth-integrator")->text : (model.discrete_time ? "discrete" : "cvodes"),
+            has ? v.Get("truth-integrator")->line : v.section().line,
+            "[" + sc->section + "] truth-integrator"},
+      err, [&](const std::string& t) {
+        const Integrator i = ParseIntegrator(t);
+        const std::string e = model.CheckIntegrator(i);
+        if (!e.empty()) throw InputError(e);
+        return i;
+      });
   if (v.Has("truth-method")) {
-    const std::string m = get("truth-method")->text;
+    const std::string m = v.Get("truth-method")->text;
     if (m == "bdf")
       tr.method = CvodesMethod::kBdf;
     else if (m == "adams")
@@ -156,90 +164,120 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     else if (m != "default")
       v.Fail("truth-method", "expected bdf, adams or default, got '" + m + "'");
   }
+}
+
+// The truth's tolerances, substeps, step limit and input hold, checked
+// together, and the truth's description (its integrator) begun.
+void SetTruthTransition(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
+  SetTruthIntegrator(v, err, sc);
+  TransitionOptions& tr = sc->truth.transition;
   if (v.Has("truth-rtol"))
-    tr.rtol = Checked(*get("truth-rtol"), err,
+    tr.rtol = Checked(*v.Get("truth-rtol"), err,
                       [](const std::string& t) { return ParseNumber(t, "truth-rtol"); });
   if (v.Has("truth-atol"))
-    tr.atol = Checked(*get("truth-atol"), err,
+    tr.atol = Checked(*v.Get("truth-atol"), err,
                       [](const std::string& t) { return ParseNumber(t, "truth-atol"); });
   if (v.Has("truth-substeps"))
-    tr.substeps = Checked(*get("truth-substeps"), err, [](const std::string& t) {
+    tr.substeps = Checked(*v.Get("truth-substeps"), err, [](const std::string& t) {
       return ParseCount(t, "truth-substeps", 1, kMaxSubsteps);
     });
   if (v.Has("truth-max-steps"))
-    tr.max_steps = Checked(*get("truth-max-steps"), err, [](const std::string& t) {
+    tr.max_steps = Checked(*v.Get("truth-max-steps"), err, [](const std::string& t) {
       return ParseInteger(t, "truth-max-steps", 1);
     });
   // How the input goes between samples, for the truth and every filter.
   if (v.Has("input-hold"))
     tr.input_hold =
-        Checked(*get("input-hold"), err, [](const std::string& t) { return ParseInputHold(t); });
+        Checked(*v.Get("input-hold"), err, [](const std::string& t) { return ParseInputHold(t); });
   std::string error;
   if (!tr.IsValid(&error)) v.FailSection(error);
-  sc.truth_description = IntegratorName(tr.integrator);
+  sc->truth_description = IntegratorName(tr.integrator);
   if (tr.integrator == Integrator::kCvodes)
-    sc.truth_description += " rtol " + FormatNumber(tr.rtol) + " atol " + FormatNumber(tr.atol);
+    sc->truth_description += " rtol " + FormatNumber(tr.rtol) + " atol " + FormatNumber(tr.atol);
   else if (tr.substeps > 1)
-    sc.truth_description += " x" + std::to_string(tr.substeps) + " substeps";
+    sc->truth_description += " x" + std::to_string(tr.substeps) + " substeps";
+}
 
-  // Process noise of the truth, per step of dt.
-  sc.oracle_q.assign(n * n, 0.0);
-  const std::string pn = text_or("process-noise", "none");
-  {
-    const auto space = pn.find_first_of(" \t");
-    const std::string kind = pn.substr(0, space);
-    const std::string arg = space == std::string::npos ? "" : Trim(pn.substr(space));
-    const Value val{arg, v.Has("process-noise") ? get("process-noise")->line : 0,
-                    "[" + sc.section + "] process-noise"};
-    if (kind == "none") {
-      sc.truth_description += ", no process noise";
-    } else if (kind == "diag") {
-      const auto d = Checked(val, err, [&](const std::string& t) {
-        auto list = ParseList(t, "process-noise");
-        RequireLength(list, n, "process-noise", "one variance per state");
-        RequireNonNegative(list, "process-noise");
-        return list;
-      });
-      for (int i = 0; i < n; ++i) sc.oracle_q[i * n + i] = d[i];
-      truth.process_noise_var = d;
-      sc.truth_description += ", process noise diag " + JoinDoubles(d);
-    } else if (kind == "white-accel") {
-      sc.oracle_qc = Checked(val, err, [](const std::string& t) {
-        const double qc = ParseNumber(t, "process-noise");
-        if (qc < 0) throw InputError("process-noise: qc must be >= 0");
-        return qc;
-      });
-      if (model.position_rate_pairs.empty())
-        v.Fail("process-noise", "white-accel needs (position, rate) state pairs; model '" +
-                                    model.name + "' has none");
-      sc.oracle_q_white_accel = true;
-      sc.oracle_q = WhiteAccelCovariance(model, sc.oracle_qc, truth.dt);
-      truth.process_noise_cov = sc.oracle_q;
-      sc.truth_description += ", white-accel qc " + FormatNumber(sc.oracle_qc);
-    } else if (kind == "matrix") {
-      sc.oracle_q = Checked(val, err, [&](const std::string& t) {
-        auto q = ParseMatrix(t, n, "process-noise");
-        cli::CheckCovariance(q, n, "process-noise", true);
-        return q;
-      });
-      truth.process_noise_cov = sc.oracle_q;
-      sc.truth_description += ", process noise matrix";
-    } else {
-      v.Fail("process-noise",
-             "expected none, diag V1,V2,..., white-accel QC or matrix A,B;C,D, "
-             "got '" +
-                 pn + "'");
-    }
+// `process-noise = diag V1,V2,...`: one variance per state.
+void SetDiagProcessNoise(const Value& val, const ConfigErrors& err, ScenarioConfig* sc) {
+  const int n = int(sc->model->states.size());
+  const auto d = Checked(val, err, [&](const std::string& t) {
+    auto list = ParseList(t, "process-noise");
+    RequireLength(list, n, "process-noise", "one variance per state");
+    RequireNonNegative(list, "process-noise");
+    return list;
+  });
+  for (int i = 0; i < n; ++i) sc->oracle_q[i * n + i] = d[i];
+  sc->truth.process_noise_var = d;
+  sc->truth_description += ", process noise diag " + JoinDoubles(d);
+}
+
+// `process-noise = white-accel QC`: white acceleration on the model's
+// (position, rate) state pairs.
+void SetWhiteAccelProcessNoise(const SectionValues& v, const Value& val, const ConfigErrors& err,
+                               ScenarioConfig* sc) {
+  const ModelEntry& model = *sc->model;
+  sc->oracle_qc = Checked(val, err, [](const std::string& t) {
+    const double qc = ParseNumber(t, "process-noise");
+    if (qc < 0) throw InputError("process-noise: qc must be >= 0");
+    return qc;
+  });
+  if (model.position_rate_pairs.empty())
+    v.Fail("process-noise",
+           "white-accel needs (position, rate) state pairs; model '" + model.name + "' has none");
+  sc->oracle_q_white_accel = true;
+  sc->oracle_q = WhiteAccelCovariance(model, sc->oracle_qc, sc->truth.dt);
+  sc->truth.process_noise_cov = sc->oracle_q;
+  sc->truth_description += ", white-accel qc " + FormatNumber(sc->oracle_qc);
+}
+
+// Process noise of the truth, per step of dt: `process-noise = KIND ARG`
+// (none by default), also the oracle Q.
+void SetProcessNoise(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
+  const int n = int(sc->model->states.size());
+  sc->oracle_q.assign(n * n, 0.0);
+  const std::string pn = v.Has("process-noise") ? v.Get("process-noise")->text : "none";
+  const auto space = pn.find_first_of(" \t");
+  const std::string kind = pn.substr(0, space);
+  const std::string arg = space == std::string::npos ? "" : Trim(pn.substr(space));
+  const Value val{arg, v.Has("process-noise") ? v.Get("process-noise")->line : 0,
+                  "[" + sc->section + "] process-noise"};
+  if (kind == "none") {
+    sc->truth_description += ", no process noise";
+  } else if (kind == "diag") {
+    SetDiagProcessNoise(val, err, sc);
+  } else if (kind == "white-accel") {
+    SetWhiteAccelProcessNoise(v, val, err, sc);
+  } else if (kind == "matrix") {
+    sc->oracle_q = Checked(val, err, [&](const std::string& t) {
+      auto q = ParseMatrix(t, n, "process-noise");
+      cli::CheckCovariance(q, n, "process-noise", true);
+      return q;
+    });
+    sc->truth.process_noise_cov = sc->oracle_q;
+    sc->truth_description += ", process noise matrix";
+  } else {
+    v.Fail("process-noise",
+           "expected none, diag V1,V2,..., white-accel QC or matrix A,B;C,D, "
+           "got '" +
+               pn + "'");
   }
+}
 
+// The truth's measurement (required), its noise variances and its sensor
+// rates; returns the measurement.
+const MeasurementDesc& SetMeasurement(const SectionValues& v, const ConfigErrors& err,
+                                      ScenarioConfig* sc) {
+  SimulationSpec& truth = sc->truth;
   if (!v.Has("measurement")) v.FailSection("'measurement' is required (see 'estlab list')");
-  const MeasurementDesc& meas = *Checked(
-      *get("measurement"), err, [&](const std::string& t) { return &model.FindMeasurement(t); });
+  const MeasurementDesc& meas = *Checked(*v.Get("measurement"), err, [&](const std::string& t) {
+    return &sc->model->FindMeasurement(t);
+  });
   truth.measurement = meas.name;  // "imu,gps": the measurement with those groups
   const int m = int(meas.outputs.size());
   truth.meas_noise_var.assign(m, 0.0);
   if (v.Has("meas-noise-var")) {
-    truth.meas_noise_var = Checked(*get("meas-noise-var"), err, [&](const std::string& t) {
+    truth.meas_noise_var = Checked(*v.Get("meas-noise-var"), err, [&](const std::string& t) {
       auto list = ParseList(t, "meas-noise-var");
       RequireLength(list, m, "meas-noise-var", "one per output of '" + meas.name + "'");
       RequireNonNegative(list, "meas-noise-var");
@@ -247,60 +285,90 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
     });
   }
   // The rates alone, then with the every-k groups: an error at its key's line.
-  auto text = [&](const char* k) { return v.Has(k) ? get(k)->text : std::string(); };
+  auto text = [&](const char* k) { return v.Has(k) ? v.Get(k)->text : std::string(); };
   for (const bool with_every : {false, true}) {
     const char* key = with_every ? "sensor-every" : "sensor-rate";
     if (!v.Has(key)) continue;
-    truth.output_every = Checked(*get(key), err, [&](const std::string&) {
+    truth.output_every = Checked(*v.Get(key), err, [&](const std::string&) {
       return OutputEvery(meas, text("sensor-rate"), with_every ? text("sensor-every") : "",
                          truth.dt, "sensor-rate", "sensor-every");
     });
   }
-  sc.oracle_r.assign(m * m, 0.0);
-  for (int j = 0; j < m; ++j) sc.oracle_r[j * m + j] = truth.meas_noise_var[j];
+  return meas;
+}
+
+// The oracle R (the measurement variances), the noise's distribution
+// (`meas-noise = gaussian | poisson`) and measure-at-t0.
+void SetMeasurementNoise(const SectionValues& v, const ConfigErrors& err,
+                         const MeasurementDesc& meas, ScenarioConfig* sc) {
+  SimulationSpec& truth = sc->truth;
+  const int m = int(meas.outputs.size());
+  sc->oracle_r.assign(m * m, 0.0);
+  for (int j = 0; j < m; ++j) sc->oracle_r[j * m + j] = truth.meas_noise_var[j];
   if (v.Has("meas-noise")) {
-    const std::string kind = get("meas-noise")->text;
+    const std::string kind = v.Get("meas-noise")->text;
     if (kind == "poisson") {
       // The counts' variance is lambda, so the oracle R stays diag(lambda);
       // their mean lambda is a bias no filter here models (as in paper 004).
-      sc.poisson_meas = true;
-      sc.poisson_lambda = truth.meas_noise_var;
+      sc->poisson_meas = true;
+      sc->poisson_lambda = truth.meas_noise_var;
       truth.meas_noise_var.assign(m, 0.0);
-      sc.truth_description += ", Poisson measurement counts";
+      sc->truth_description += ", Poisson measurement counts";
     } else if (kind != "gaussian") {
       v.Fail("meas-noise", "expected gaussian or poisson, got '" + kind + "'");
     }
   }
   if (v.Has("measure-at-t0"))
-    sc.measure_at_t0 = Checked(*get("measure-at-t0"), err,
-                               [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
-  if (v.Has("input")) SetScenarioInput(v, *get("input"), err, recorded, &sc);
+    sc->measure_at_t0 = Checked(*v.Get("measure-at-t0"), err,
+                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
+}
 
-  if (recorded) ReadRecordedData(v, &sc);
-
-  sc.prior_x0 = v.Has("prior-x0") ? parse_state("prior-x0") : truth.x0;
+// The filters' prior: prior-x0 (the truth's x0 by default) and P0 from
+// prior-p0-diag or prior-p0 (identity by default), checked as a covariance.
+void SetPrior(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
+  const int n = int(sc->model->states.size());
+  sc->prior_x0 = v.Has("prior-x0") ? ParseState(v, err, *sc->model, "prior-x0") : sc->truth.x0;
   if (v.Has("prior-p0-diag") && v.Has("prior-p0"))
     v.Fail("prior-p0", "give only one of prior-p0-diag and prior-p0");
-  sc.prior_p0.assign(n * n, 0.0);
+  sc->prior_p0.assign(n * n, 0.0);
   if (v.Has("prior-p0-diag")) {
-    const auto d = Checked(*get("prior-p0-diag"), err, [&](const std::string& t) {
+    const auto d = Checked(*v.Get("prior-p0-diag"), err, [&](const std::string& t) {
       auto list = ParseList(t, "prior-p0-diag");
       RequireLength(list, n, "prior-p0-diag", "one per state");
       return list;
     });
-    for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = d[i];
+    for (int i = 0; i < n; ++i) sc->prior_p0[i * n + i] = d[i];
   } else if (v.Has("prior-p0")) {
-    sc.prior_p0 = Checked(*get("prior-p0"), err,
-                          [&](const std::string& t) { return ParseMatrix(t, n, "prior-p0"); });
+    sc->prior_p0 = Checked(*v.Get("prior-p0"), err,
+                           [&](const std::string& t) { return ParseMatrix(t, n, "prior-p0"); });
   } else {
-    for (int i = 0; i < n; ++i) sc.prior_p0[i * n + i] = 1.0;
+    for (int i = 0; i < n; ++i) sc->prior_p0[i * n + i] = 1.0;
   }
   const std::string p0_key = v.Has("prior-p0") ? "prior-p0" : "prior-p0-diag";
   try {
-    cli::CheckCovariance(sc.prior_p0, n, "P0", false);
+    cli::CheckCovariance(sc->prior_p0, n, "P0", false);
   } catch (const InputError& e) {
     v.Fail(p0_key, e.what());
   }
+}
+
+}  // namespace
+
+ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
+  ScenarioConfig sc;
+  sc.section = v.section().full;
+  SetScenarioModel(v, err, &sc);
+  const bool recorded = v.Has("data");
+  SetTruthStart(v, err, recorded, &sc);
+  SetTruthTransition(v, err, &sc);
+  SetProcessNoise(v, err, &sc);
+  const MeasurementDesc& meas = SetMeasurement(v, err, &sc);
+  SetMeasurementNoise(v, err, meas, &sc);
+  if (v.Has("input")) SetScenarioInput(v, *v.Get("input"), err, recorded, &sc);
+
+  if (recorded) ReadRecordedData(v, &sc);
+
+  SetPrior(v, err, &sc);
   return sc;
 }
 

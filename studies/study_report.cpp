@@ -400,9 +400,40 @@ double ScoreAgainst(const StudyTables& t, const ScenarioConfig& sc, const Filter
 
 namespace {
 
-// The hand settings are "the paper's" only when [report] names a paper; a
-// study of the user's own data has its own hand settings.
-void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t) {
+// The case of one tuned setting `tc` of filter `fi` in scenario `sc`: its
+// score and those of the hand settings against the reference, the best hand
+// setting and the paired differences.
+CompareCase MakeCompareCase(const StudyConfig& c, const StudyTables& t, const ScenarioConfig& sc,
+                            size_t fi, const Combo* tc, const std::vector<const Combo*>& hands,
+                            const std::vector<const Combo*>& oracles) {
+  CompareCase k;
+  k.sc = &sc;
+  k.filter = c.filters[fi].name;
+  k.tuned = c.noises[tc->noise].name;
+  k.has_oracle = !oracles.empty();
+  k.reference = c.noises[(k.has_oracle ? oracles[0] : hands[0])->noise].name;
+  k.tuner_status = TunerStatus(t, sc.name, k.filter, k.tuned);
+  k.auto_score = Score(t, sc, k.filter, k.tuned, k.reference);
+  for (const Combo* h : hands) {
+    const std::string name = c.noises[h->noise].name;
+    k.hands.push_back(name);
+    const double score = Score(t, sc, k.filter, name, k.reference);
+    if (std::isfinite(score) && !(score >= k.hand_score)) {
+      k.hand_score = score;
+      k.best_hand = name;
+      k.hand_is_oracle = false;
+      for (const Combo* o : oracles) k.hand_is_oracle |= SameNoise(h->spec, o->spec);
+    }
+  }
+  k.auto_vs_ref = ScoreDifference(t, sc, k.filter, k.tuned, k.reference, k.reference);
+  if (!k.best_hand.empty())
+    k.auto_vs_hand = ScoreDifference(t, sc, k.filter, k.tuned, k.best_hand, k.reference);
+  return k;
+}
+
+// Every scenario x filter x tuned setting (tuned once, not per run) that has
+// a hand or an oracle setting to compare with.
+std::vector<CompareCase> CompareCases(const StudyConfig& c, const StudyTables& t) {
   std::vector<CompareCase> cases;
   for (const ScenarioConfig& sc : c.scenarios) {
     if (!sc.has_truth) continue;  // no RMSE: RecordedDataSection compares them
@@ -416,38 +447,26 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
         if (role == "oracle") oracles.push_back(&cb);
       }
       if (tuneds.empty() || (hands.empty() && oracles.empty())) continue;
-      for (const Combo* tc : tuneds) {
-        CompareCase k;
-        k.sc = &sc;
-        k.filter = c.filters[fi].name;
-        k.tuned = c.noises[tc->noise].name;
-        k.has_oracle = !oracles.empty();
-        k.reference = c.noises[(k.has_oracle ? oracles[0] : hands[0])->noise].name;
-        k.tuner_status = TunerStatus(t, sc.name, k.filter, k.tuned);
-        k.auto_score = Score(t, sc, k.filter, k.tuned, k.reference);
-        for (const Combo* h : hands) {
-          const std::string name = c.noises[h->noise].name;
-          k.hands.push_back(name);
-          const double score = Score(t, sc, k.filter, name, k.reference);
-          if (std::isfinite(score) && !(score >= k.hand_score)) {
-            k.hand_score = score;
-            k.best_hand = name;
-            k.hand_is_oracle = false;
-            for (const Combo* o : oracles) k.hand_is_oracle |= SameNoise(h->spec, o->spec);
-          }
-        }
-        k.auto_vs_ref = ScoreDifference(t, sc, k.filter, k.tuned, k.reference, k.reference);
-        if (!k.best_hand.empty())
-          k.auto_vs_hand = ScoreDifference(t, sc, k.filter, k.tuned, k.best_hand, k.reference);
-        cases.push_back(k);
-      }
+      for (const Combo* tc : tuneds)
+        cases.push_back(MakeCompareCase(c, t, sc, fi, tc, hands, oracles));
     }
   }
-  if (cases.empty()) return;
-  auto interval = [](const MetricStats& d, double base) {
-    return d.n > 1 ? " [" + Sig(base + d.ci95_lo, 3) + ", " + Sig(base + d.ci95_hi, 3) + "]"
-                   : std::string();
-  };
+  return cases;
+}
+
+// " [lo, hi]": the 95 % CI of base + the paired differences d ("" for a
+// single run).
+std::string PairedInterval(const MetricStats& d, double base) {
+  return d.n > 1 ? " [" + Sig(base + d.ci95_lo, 3) + ", " + Sig(base + d.ci95_hi, 3) + "]"
+                 : std::string();
+}
+
+// The section's heading, its explanation and the table of scores, one row
+// per case, and the count of cases that meet each target.
+// The hand settings are "the paper's" only when [report] names a paper; a
+// study of the user's own data has its own hand settings.
+void CompareScoreTable(std::ostringstream& md, const StudyConfig& c,
+                       const std::vector<CompareCase>& cases) {
   md << "## Hand-tuned vs auto-tuned vs oracle Q/R\n\n"
      << "Each filter with "
      << (c.paper.empty() ? "the config's hand noise settings"
@@ -473,15 +492,54 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
        << (k.best_hand.empty() ? "–"
                                : "`" + k.best_hand + "`" + (k.hand_is_oracle ? " (= oracle)" : ""))
        << " | " << Sig(k.hand_score, 3) << " | " << Sig(k.auto_score, 3)
-       << interval(k.auto_vs_ref, 1.0) << " | " << (k.has_oracle ? (o_ok ? "yes" : "**no**") : "–")
-       << " | " << (k.best_hand.empty() ? "–" : (h_ok ? "yes" : "**no**")) << " | "
+       << PairedInterval(k.auto_vs_ref, 1.0) << " | "
+       << (k.has_oracle ? (o_ok ? "yes" : "**no**") : "–") << " | "
+       << (k.best_hand.empty() ? "–" : (h_ok ? "yes" : "**no**")) << " | "
        << (k.tuner_status.empty() ? "–" : k.tuner_status) << " |\n";
   }
   md << "\nauto ≤ 1.1 × oracle holds in " << ok_oracle << " of " << n_oracle
      << " scenario × filter cases; auto ≤ best hand in " << ok_hand << " of " << n_hand << ".\n\n";
+}
 
-  // Plain sentences for every case that misses a target, and why as far as
-  // the numbers tell.
+// The states where auto loses most against the oracle: "state ratio ×" for
+// every state whose mean RMSE is above 1.1 × the reference's.
+std::string WorstStates(const StudyTables& t, const CompareCase& k) {
+  std::string worst;
+  for (const auto& st : k.sc->model->states) {
+    const double a = Cell(t, *k.sc, k.filter, k.tuned, "rmse_" + st).stats.mean;
+    const double o = Cell(t, *k.sc, k.filter, k.reference, "rmse_" + st).stats.mean;
+    if (a / o > 1.1) worst += (worst.empty() ? "" : ", ") + st + " " + Sig(a / o, 3) + " ×";
+  }
+  return worst;
+}
+
+// The sentence for a case where auto scores above the best hand setting
+// (`who` names the case, `tuner` is the tuner's status sentence or "").
+std::string HandMissSentence(const CompareCase& k, const std::string& who,
+                             const std::string& tuner) {
+  const MetricStats& d = k.auto_vs_hand;
+  const bool noise = d.n > 1 && d.ci95_lo <= 0.0 && d.ci95_hi >= 0.0;
+  return who + ": auto scores " + Sig(k.auto_score, 3) + ", the best hand setting `" + k.best_hand +
+         "` " + Sig(k.hand_score, 3) + " (paired difference " + Sig(d.mean, 3) +
+         (d.n > 1 ? " [" + Sig(d.ci95_lo, 3) + ", " + Sig(d.ci95_hi, 3) + "]" : "") +
+         (noise ? ", within the Monte Carlo noise" : ", significant") + ")." +
+         (k.hand_is_oracle ? " That hand setting is the truth's own noise, so the tuner can at "
+                             "best tie it."
+                           : "") +
+         (k.has_oracle && k.hand_score < 1.0 && !k.hand_is_oracle
+              ? " The hand setting beats the truth's own noise (score < 1): the filter's "
+                "process model is wrong (e.g. a coarse fixed-step integrator), its error acts "
+                "as extra, time-correlated process noise, and larger hand Q/R absorb it better "
+                "than the Q/R that maximise the likelihood of a white-noise model, which land "
+                "near the oracle."
+              : "") +
+         tuner;
+}
+
+// Plain sentences for every case that misses a target, and why as far as
+// the numbers tell.
+void CompareMisses(std::ostringstream& md, const StudyTables& t,
+                   const std::vector<CompareCase>& cases) {
   std::vector<std::string> misses;
   for (const CompareCase& k : cases) {
     const std::string who = "`" + k.sc->name + "` / " + k.filter;
@@ -493,40 +551,15 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
     const std::string tuner = k.tuner_status.empty() || k.tuner_status == "converged"
                                   ? ""
                                   : " The tuner ended with status '" + k.tuner_status + "'.";
-    // The states where auto loses most against the oracle.
-    std::string worst;
-    for (const auto& st : k.sc->model->states) {
-      const double a = Cell(t, *k.sc, k.filter, k.tuned, "rmse_" + st).stats.mean;
-      const double o = Cell(t, *k.sc, k.filter, k.reference, "rmse_" + st).stats.mean;
-      if (a / o > 1.1) worst += (worst.empty() ? "" : ", ") + st + " " + Sig(a / o, 3) + " ×";
-    }
+    const std::string worst = WorstStates(t, k);
     if (k.has_oracle && !(k.auto_score <= 1.1)) {
-      const MetricStats& d = k.auto_vs_ref;
       misses.push_back(who + ": auto scores " + Sig(k.auto_score, 3) + " × the oracle" +
-                       interval(d, 1.0) + ", above 1.1" +
+                       PairedInterval(k.auto_vs_ref, 1.0) + ", above 1.1" +
                        (worst.empty() ? "" : " (states above 1.1 × the oracle: " + worst + ")") +
                        "." + tuner);
     }
-    if (!k.best_hand.empty() && !(k.auto_score <= k.hand_score)) {
-      const MetricStats& d = k.auto_vs_hand;
-      const bool noise = d.n > 1 && d.ci95_lo <= 0.0 && d.ci95_hi >= 0.0;
-      misses.push_back(
-          who + ": auto scores " + Sig(k.auto_score, 3) + ", the best hand setting `" +
-          k.best_hand + "` " + Sig(k.hand_score, 3) + " (paired difference " + Sig(d.mean, 3) +
-          (d.n > 1 ? " [" + Sig(d.ci95_lo, 3) + ", " + Sig(d.ci95_hi, 3) + "]" : "") +
-          (noise ? ", within the Monte Carlo noise" : ", significant") + ")." +
-          (k.hand_is_oracle ? " That hand setting is the truth's own noise, so the tuner can at "
-                              "best tie it."
-                            : "") +
-          (k.has_oracle && k.hand_score < 1.0 && !k.hand_is_oracle
-               ? " The hand setting beats the truth's own noise (score < 1): the filter's "
-                 "process model is wrong (e.g. a coarse fixed-step integrator), its error acts "
-                 "as extra, time-correlated process noise, and larger hand Q/R absorb it better "
-                 "than the Q/R that maximise the likelihood of a white-noise model, which land "
-                 "near the oracle."
-               : "") +
-          tuner);
-    }
+    if (!k.best_hand.empty() && !(k.auto_score <= k.hand_score))
+      misses.push_back(HandMissSentence(k, who, tuner));
   }
   if (misses.empty()) {
     md << "Both targets hold in every case where they apply.\n\n";
@@ -535,28 +568,44 @@ void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const S
     for (const auto& m : misses) md << "- " << m << "\n";
     md << "\n";
   }
+}
 
-  // Per state: the best hand setting (by score), auto and oracle mean RMSE.
+// "mean [ci95_lo, ci95_hi]" of a cell's RMSE, "–" without runs.
+std::string RmseCellText(const RoleCell& cell) {
+  return cell.stats.n ? Sig(cell.stats.mean) + " [" + Sig(cell.stats.ci95_lo, 3) + ", " +
+                            Sig(cell.stats.ci95_hi, 3) + "]"
+                      : std::string("–");
+}
+
+// Per state: the best hand setting (by score), auto and oracle mean RMSE.
+void ComparePerStateTable(std::ostringstream& md, const StudyTables& t,
+                          const std::vector<CompareCase>& cases) {
   md << "Per state, mean RMSE over the runs [95 % CI of the mean]:\n\n"
      << "| scenario | filter | state | best hand | auto | oracle | auto / oracle |\n"
      << "|---|---|---|---|---|---|---|\n";
-  auto cell_text = [](const RoleCell& cell) {
-    return cell.stats.n ? Sig(cell.stats.mean) + " [" + Sig(cell.stats.ci95_lo, 3) + ", " +
-                              Sig(cell.stats.ci95_hi, 3) + "]"
-                        : std::string("–");
-  };
   for (const CompareCase& k : cases) {
     for (const auto& st : k.sc->model->states) {
       const std::string metric = "rmse_" + st;
       const RoleCell a = Cell(t, *k.sc, k.filter, k.tuned, metric);
       const RoleCell o = Cell(t, *k.sc, k.filter, k.reference, metric);
       md << "| " << k.sc->name << " | " << k.filter << " | " << st << " | "
-         << (k.best_hand.empty() ? "–" : cell_text(Cell(t, *k.sc, k.filter, k.best_hand, metric)))
-         << " | " << cell_text(a) << " | " << (k.has_oracle ? cell_text(o) : "–") << " | "
+         << (k.best_hand.empty() ? "–"
+                                 : RmseCellText(Cell(t, *k.sc, k.filter, k.best_hand, metric)))
+         << " | " << RmseCellText(a) << " | " << (k.has_oracle ? RmseCellText(o) : "–") << " | "
          << (k.has_oracle && o.stats.n ? Sig(a.stats.mean / o.stats.mean, 3) : "–") << " |\n";
     }
   }
   md << "\n";
+}
+
+// The comparison of hand, auto-tuned and oracle Q/R: the score table, the
+// missed targets and the per-state RMSE (nothing without a case to compare).
+void HandAutoOracleSection(std::ostringstream& md, const StudyConfig& c, const StudyTables& t) {
+  const std::vector<CompareCase> cases = CompareCases(c, t);
+  if (cases.empty()) return;
+  CompareScoreTable(md, c, cases);
+  CompareMisses(md, t, cases);
+  ComparePerStateTable(md, t, cases);
 }
 
 struct ClaimCase {

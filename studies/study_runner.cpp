@@ -255,12 +255,133 @@ FilterData RunData(const ScenarioConfig& sc, int run, uint64_t seed, SimulationR
   return DataFromTruth(sc, *truth, "scenario " + sc.name + " run " + std::to_string(run), seed);
 }
 
+// One combo's filter run within a run: the row key (scenario, filter, noise,
+// run), the filter's output, the per-run identification and the status.
+struct ComboRun {
+  std::vector<std::string> key;
+  FilterRunOutput out;
+  RunIdentification id;
+  std::string status = "ok", message;
+};
+
+// Runs combo `cb` on a run's data: identifies its Q/R first when it tunes
+// per run, then runs the filter; a failed truth, tuning or filter sets the
+// status and message instead.
+ComboRun RunCombo(const StudyConfig& c, const ScenarioConfig& sc, const Combo& cb, int run,
+                  uint64_t seed, const FilterData& data, const std::string& truth_error) {
+  const std::string& fname = c.filters[cb.filter].name;
+  const std::string& nname = c.noises[cb.noise].name;
+  ComboRun r;
+  r.key = {sc.name, fname, nname, std::to_string(run)};
+  if (cb.tune_per_run && truth_error.empty())
+    r.id = IdentifyInRun(sc, cb, data, ComboSeed(seed, fname, nname));
+  if (!truth_error.empty()) {
+    r.status = "truth_failed";
+    r.message = truth_error;
+  } else if (!cb.tune_failure.empty() || !r.id.failure.empty()) {
+    r.status = "tune_failed";
+    r.message = cb.tune_per_run ? r.id.failure : cb.tune_failure;
+  } else {
+    FilterSpec spec = cb.tune_per_run ? r.id.spec : cb.spec;
+    if (auto* pf = std::get_if<ParticleOptions>(&spec.filter))
+      pf->seed = ComboSeed(seed, fname, nname);
+    try {
+      r.out = sc.model->run_filter(spec, data);
+      if (!r.out.summary.ok) {
+        r.status = r.out.summary.status.empty() ? "failed" : r.out.summary.status;
+        r.message = r.out.summary.message;
+      }
+    } catch (const std::exception& e) {
+      r.status = "error";
+      r.message = e.what();
+    }
+  }
+  return r;
+}
+
+// "1" when v is within the bounds b, "0" when not, "" when v is not finite.
+std::string InsideText(double v, const double b[2]) {
+  return std::isfinite(v) ? std::string(v >= b[0] && v <= b[1] ? "1" : "0") : std::string();
+}
+
+// The runs.csv row of a combo's run: its metrics, empty where the filter did
+// not run.
+std::string RunsRow(const StudyConfig& c, const ScenarioConfig& sc, const Combo& cb, uint64_t seed,
+                    const ComboRun& r) {
+  const FilterSummary& sum = r.out.summary;
+  std::vector<std::string> row = r.key;
+  row.push_back(std::to_string(seed));
+  row.push_back(r.status);
+  for (const char* kind : {"rmse", "mae"}) {
+    const auto& v = std::string(kind) == "rmse" ? sum.rmse : sum.mae;
+    for (const auto& col : c.state_columns) {
+      const int i = Column(sc.model->states, col);
+      row.push_back(i >= 0 && size_t(i) < v.size() ? Full(v[i]) : "");
+    }
+  }
+  const bool ran = r.status == "ok" || !r.out.rows.empty();
+  // Recorded runs: the NIS after the scenario's burn-in (the prior's transient).
+  NoTruthMetrics no_truth;
+  if (!c.output_columns.empty())
+    no_truth = ComputeNoTruthMetrics(r.out, sc.model->FindMeasurement(sc.truth.measurement).outputs,
+                                     sc.burn_in);
+  const double mean_nis = sc.recorded ? no_truth.mean_nis : sum.mean_nis;
+  const double* nis_bounds = sc.recorded ? no_truth.nis_bounds95 : sum.nis_bounds95;
+  row.push_back(ran ? Full(sum.mean_nees) : "");
+  row.push_back(ran ? Full(mean_nis) : "");
+  row.push_back(ran ? InsideText(sum.mean_nees, sum.nees_bounds95) : "");
+  row.push_back(ran ? InsideText(mean_nis, nis_bounds) : "");
+  row.push_back(ran ? Full(sum.loglik) : "");
+  if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
+  if (c.identification) AppendIdentification(c, sc, cb, r.id, &row);
+  row.push_back(std::to_string(sum.steps));
+  row.push_back(r.message);
+  return FormatCsvRow(row);
+}
+
+// The timing.csv row of a combo's run.
+std::string TimingRow(const StudyConfig& c, const ComboRun& r, const SimulationResult& truth) {
+  const FilterSummary& sum = r.out.summary;
+  std::vector<std::string> timing = r.key;
+  // No filter ran when the truth or the tuning failed: no filter cost.
+  const bool filtered = r.status != "truth_failed" && r.status != "tune_failed";
+  timing.push_back(filtered ? Sig6(sum.us_per_step) : "");
+  timing.push_back(filtered ? Sig6(sum.wall_s) : "");
+  timing.push_back(Sig6(truth.wall_s));
+  if (c.identification) timing.push_back(r.id.attempted ? Sig6(r.id.wall_s) : "");
+  return FormatCsvRow(timing);
+}
+
+// The steps.csv rows of a combo's run: per-step errors, every `every` steps
+// and the last.
+std::string StepsRows(const RunContext& ctx, const ScenarioConfig& sc, const ComboRun& r) {
+  std::vector<int> err_cols;
+  for (const auto& col : ctx.config->state_columns) {
+    const int i = Column(sc.model->states, col);
+    err_cols.push_back(i >= 0 ? Column(r.out.columns, col + "_err") : -1);
+  }
+  const int nees_c = Column(r.out.columns, "nees"), nis_c = Column(r.out.columns, "nis");
+  std::string text;
+  for (size_t k = 0; k < r.out.rows.size(); ++k) {
+    if (k % size_t(ctx.every) != 0 && k + 1 != r.out.rows.size()) continue;
+    const auto& row = r.out.rows[k];
+    std::vector<std::string> step = r.key;
+    step.push_back(Sig10(row[0]));
+    for (int col : err_cols) step.push_back(col >= 0 ? Sig6(row[col]) : "");
+    step.push_back(nees_c >= 0 ? Sig6(row[nees_c]) : "");
+    step.push_back(nis_c >= 0 ? Sig6(row[nis_c]) : "");
+    text += FormatCsvRow(step);
+  }
+  return text;
+}
+
+// Run `run` of scenario `s`: every combo's filter on the run's data, as the
+// text it adds to runs.csv, steps.csv and timing.csv (and its timeseries
+// files, for the runs kept).
 RunText RunOne(const RunContext& ctx, int s, int run) {
   const StudyConfig& c = *ctx.config;
   const ScenarioConfig& sc = c.scenarios[s];
-  const ModelEntry& model = *sc.model;
   const uint64_t seed = DeriveSeed({c.study.seed, uint64_t(s), uint64_t(run)});
-  const auto& states = model.states;
 
   SimulationResult truth;
   std::string truth_error;
@@ -268,98 +389,13 @@ RunText RunOne(const RunContext& ctx, int s, int run) {
 
   RunText text;
   for (const Combo& cb : sc.combos) {
-    const std::string& fname = c.filters[cb.filter].name;
-    const std::string& nname = c.noises[cb.noise].name;
-    const std::vector<std::string> key = {sc.name, fname, nname, std::to_string(run)};
-    FilterRunOutput out;
-    std::string status = "ok", message;
-    RunIdentification id;
-    if (cb.tune_per_run && truth_error.empty())
-      id = IdentifyInRun(sc, cb, data, ComboSeed(seed, fname, nname));
-    if (!truth_error.empty()) {
-      status = "truth_failed";
-      message = truth_error;
-    } else if (!cb.tune_failure.empty() || !id.failure.empty()) {
-      status = "tune_failed";
-      message = cb.tune_per_run ? id.failure : cb.tune_failure;
-    } else {
-      FilterSpec spec = cb.tune_per_run ? id.spec : cb.spec;
-      if (auto* pf = std::get_if<ParticleOptions>(&spec.filter))
-        pf->seed = ComboSeed(seed, fname, nname);
-      try {
-        out = model.run_filter(spec, data);
-        if (!out.summary.ok) {
-          status = out.summary.status.empty() ? "failed" : out.summary.status;
-          message = out.summary.message;
-        }
-      } catch (const std::exception& e) {
-        status = "error";
-        message = e.what();
-      }
-    }
-    if (status != "ok") ++text.failed;
-    const FilterSummary& sum = out.summary;
-
-    std::vector<std::string> row = key;
-    row.push_back(std::to_string(seed));
-    row.push_back(status);
-    for (const char* kind : {"rmse", "mae"}) {
-      const auto& v = std::string(kind) == "rmse" ? sum.rmse : sum.mae;
-      for (const auto& col : c.state_columns) {
-        const int i = Column(states, col);
-        row.push_back(i >= 0 && size_t(i) < v.size() ? Full(v[i]) : "");
-      }
-    }
-    const bool ran = status == "ok" || !out.rows.empty();
-    auto inside = [](double v, const double b[2]) {
-      return std::isfinite(v) ? std::string(v >= b[0] && v <= b[1] ? "1" : "0") : std::string();
-    };
-    // Recorded runs: the NIS after the scenario's burn-in (the prior's transient).
-    NoTruthMetrics no_truth;
-    if (!c.output_columns.empty())
-      no_truth = ComputeNoTruthMetrics(out, model.FindMeasurement(sc.truth.measurement).outputs,
-                                       sc.burn_in);
-    const double mean_nis = sc.recorded ? no_truth.mean_nis : sum.mean_nis;
-    const double* nis_bounds = sc.recorded ? no_truth.nis_bounds95 : sum.nis_bounds95;
-    row.push_back(ran ? Full(sum.mean_nees) : "");
-    row.push_back(ran ? Full(mean_nis) : "");
-    row.push_back(ran ? inside(sum.mean_nees, sum.nees_bounds95) : "");
-    row.push_back(ran ? inside(mean_nis, nis_bounds) : "");
-    row.push_back(ran ? Full(sum.loglik) : "");
-    if (!c.output_columns.empty()) AppendNoTruthMetrics(c, sc, ran, no_truth, &row);
-    if (c.identification) AppendIdentification(c, sc, cb, id, &row);
-    row.push_back(std::to_string(sum.steps));
-    row.push_back(message);
-    text.runs += FormatCsvRow(row);
-
-    std::vector<std::string> timing = key;
-    // No filter ran when the truth or the tuning failed: no filter cost.
-    const bool filtered = status != "truth_failed" && status != "tune_failed";
-    timing.push_back(filtered ? Sig6(sum.us_per_step) : "");
-    timing.push_back(filtered ? Sig6(sum.wall_s) : "");
-    timing.push_back(Sig6(truth.wall_s));
-    if (c.identification) timing.push_back(id.attempted ? Sig6(id.wall_s) : "");
-    text.timing += FormatCsvRow(timing);
-
-    // Per-step errors, every `every` steps and the last.
-    std::vector<int> err_cols;
-    for (const auto& col : c.state_columns) {
-      const int i = Column(states, col);
-      err_cols.push_back(i >= 0 ? Column(out.columns, col + "_err") : -1);
-    }
-    const int nees_c = Column(out.columns, "nees"), nis_c = Column(out.columns, "nis");
-    for (size_t k = 0; k < out.rows.size(); ++k) {
-      if (k % size_t(ctx.every) != 0 && k + 1 != out.rows.size()) continue;
-      const auto& r = out.rows[k];
-      std::vector<std::string> step = key;
-      step.push_back(Sig10(r[0]));
-      for (int col : err_cols) step.push_back(col >= 0 ? Sig6(r[col]) : "");
-      step.push_back(nees_c >= 0 ? Sig6(r[nees_c]) : "");
-      step.push_back(nis_c >= 0 ? Sig6(r[nis_c]) : "");
-      text.steps += FormatCsvRow(step);
-    }
-    if (ctx.keep.count(run) && !out.rows.empty())
-      WriteTimeseries(ctx, sc, run, fname, nname, data, out);
+    const ComboRun r = RunCombo(c, sc, cb, run, seed, data, truth_error);
+    if (r.status != "ok") ++text.failed;
+    text.runs += RunsRow(c, sc, cb, seed, r);
+    text.timing += TimingRow(c, r, truth);
+    text.steps += StepsRows(ctx, sc, r);
+    if (ctx.keep.count(run) && !r.out.rows.empty())
+      WriteTimeseries(ctx, sc, run, r.key[1], r.key[2], data, r.out);
   }
   return text;
 }
