@@ -15,6 +15,25 @@
 
 namespace estlab {
 
+namespace {
+constexpr std::pair<NoiseRole, const char*> kNoiseRoles[] = {{NoiseRole::kHand, "hand"},
+                                                             {NoiseRole::kTuned, "tuned"},
+                                                             {NoiseRole::kOracle, "oracle"},
+                                                             {NoiseRole::kOther, "other"}};
+}  // namespace
+
+const char* NoiseRoleName(NoiseRole role) {
+  for (const auto& [r, name] : kNoiseRoles)
+    if (r == role) return name;
+  return "other";
+}
+
+bool ParseNoiseRole(const std::string& text, NoiseRole* role) {
+  for (const auto& [r, name] : kNoiseRoles)
+    if (text == name) return *role = r, true;
+  return false;
+}
+
 uint64_t ConfigHash(const std::string& text) { return Fnv1a64(text); }
 
 namespace study_config {
@@ -115,16 +134,14 @@ FilterConfig ParseFilter(const SectionValues& v) {
 
 // The role of a [noise.NAME] section: tuned, oracle or hand from its q and
 // r, unless its `role` key names one (or other).
-std::string NoiseRole(const SectionValues& v) {
+NoiseRole RoleOf(const SectionValues& v) {
   auto text_of = [&](const char* key) { return v.Has(key) ? v.Get(key)->text : std::string(); };
-  std::string role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params") ? "tuned"
-                     : text_of("q") == "oracle" && text_of("r") == "oracle" ? "oracle"
-                                                                            : "hand";
-  if (v.Has("role")) {
-    role = v.Get("role")->text;
-    if (role != "hand" && role != "tuned" && role != "oracle" && role != "other")
-      v.Fail("role", "expected hand, tuned, oracle or other, got '" + role + "'");
-  }
+  NoiseRole role = text_of("q") == "tuned" || text_of("r") == "tuned" || v.Has("params")
+                       ? NoiseRole::kTuned
+                   : text_of("q") == "oracle" && text_of("r") == "oracle" ? NoiseRole::kOracle
+                                                                          : NoiseRole::kHand;
+  if (v.Has("role") && !ParseNoiseRole(v.Get("role")->text, &role))
+    v.Fail("role", "expected hand, tuned, oracle or other, got '" + v.Get("role")->text + "'");
   return role;
 }
 
@@ -143,7 +160,7 @@ NoiseConfig ParseNoise(const SectionValues& v, const std::vector<FilterConfig>& 
         "noise; q = tuned: the likelihood tuner)");
   if (nr != 1) v.FailSection("give exactly one of r, r-diag (r = oracle: the truth's noise)");
   nc.description = v.Has("description") ? v.Get("description")->text : NoiseDescription(v);
-  nc.role = NoiseRole(v);
+  nc.role = RoleOf(v);
   if (v.Has("tune-estimator")) {
     nc.estimator = v.Get("tune-estimator")->text;  // the estimator table's name
     Checked(*v.Get("tune-estimator"), err, [](const std::string& t) {

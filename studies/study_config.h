@@ -232,13 +232,22 @@ struct FilterConfig {
   std::vector<std::string> scenarios;  // empty = all
 };
 
+// A noise setting's part in the hand / auto / oracle comparison of
+// report.md: kTuned (q or r = tuned), kOracle (q = r = oracle), kHand
+// (anything else) or kOther (kept out of it); the `role` key overrides the
+// inferred one.
+enum class NoiseRole { kHand, kTuned, kOracle, kOther };
+
+// "hand", "tuned", "oracle", "other": the `role` key's words, and the text
+// report.md prints.
+const char* NoiseRoleName(NoiseRole role);
+// The role a word names; false for any other text.
+bool ParseNoiseRole(const std::string& text, NoiseRole* role);
+
 struct NoiseConfig {
   std::string name;
   std::string description;  // "Q oracle, R diag 0.09"
-  // Its part in the hand / auto / oracle comparison of report.md: "tuned"
-  // (q or r = tuned), "oracle" (q = r = oracle), "hand" (anything else) or
-  // "other" (kept out of it); the `role` key overrides the inferred one.
-  std::string role;
+  NoiseRole role = NoiseRole::kHand;
   std::vector<std::string> scenarios;  // empty = all
   std::vector<std::string> filters;    // empty = all
   // tune-estimator (ml | em | als) and tune-per-run of a tuned setting.

@@ -258,7 +258,8 @@ void MeansFigure(const StudyConfig& c, const ScenarioConfig& sc,
   const int lo = summary.Column("ci95_lo"), hi = summary.Column("ci95_hi");
   auto role_color = [&](const std::string& noise) {
     for (const auto& n : c.noises)
-      if (n.name == noise) return n.role == "oracle" ? 0 : n.role == "tuned" ? 1 : 2;
+      if (n.name == noise)
+        return n.role == NoiseRole::kOracle ? 0 : n.role == NoiseRole::kTuned ? 1 : 2;
     return 2;
   };
   for (const MeanPanel& p : panels) {

@@ -441,10 +441,10 @@ std::vector<CompareCase> CompareCases(const StudyConfig& c, const StudyTables& t
       std::vector<const Combo*> hands, tuneds, oracles;
       for (const Combo& cb : sc.combos) {
         if (cb.filter != int(fi)) continue;
-        const std::string& role = c.noises[cb.noise].role;
-        if (role == "hand") hands.push_back(&cb);
-        if (role == "tuned" && !cb.tune_per_run) tuneds.push_back(&cb);  // per run: below
-        if (role == "oracle") oracles.push_back(&cb);
+        const NoiseRole role = c.noises[cb.noise].role;
+        if (role == NoiseRole::kHand) hands.push_back(&cb);
+        if (role == NoiseRole::kTuned && !cb.tune_per_run) tuneds.push_back(&cb);  // per run: below
+        if (role == NoiseRole::kOracle) oracles.push_back(&cb);
       }
       if (tuneds.empty() || (hands.empty() && oracles.empty())) continue;
       for (const Combo* tc : tuneds)

@@ -92,7 +92,7 @@ std::vector<Case> Cases(const StudyConfig& c, const StudyTables& t) {
     if (!sc.has_truth) continue;
     const size_t first = cases.size();
     for (const Combo& cb : sc.combos)
-      if (cb.spec.adapt.rule.empty() && c.noises[cb.noise].role == "oracle") {
+      if (cb.spec.adapt.rule.empty() && c.noises[cb.noise].role == NoiseRole::kOracle) {
         bool known = false;
         for (size_t i = first; i < cases.size(); ++i)
           known = known || cases[i].oracle.filter == c.filters[cb.filter].name;
@@ -251,7 +251,7 @@ std::vector<std::string> Reversals(const StudyTables& t, const std::vector<Case>
     }
     // Auto-tuning is expected to beat hand-tuning.
     for (const Entry& h : k.entries) {
-      if (h.noise->role != "hand" || h.label != h.fn.noise) continue;
+      if (h.noise->role != NoiseRole::kHand || h.label != h.fn.noise) continue;
       int identified = 0, beaten = 0;
       for (const Entry& e : k.entries) {
         if (!e.per_run || e.fn.filter != h.fn.filter) continue;

@@ -76,8 +76,9 @@ void MetricsTable(std::ostringstream& md, const StudyConfig& c, const StudyTable
     const NoiseConfig& nc = c.noises[cb.noise];
     const GroupValues* g = FindGroup(t, GroupKey(sc.name, f, nc.name));
     const MetricStats inside = ComputeStats(Values(g, "nis_in95"));
-    md << "| " << f << " | " << nc.name << " | " << nc.role << " | " << (g ? g->ok : 0) << "/"
-       << (g ? g->runs : 0) << " | " << CiCell(ComputeStats(Values(g, "nll_per_step")), 6) << " | "
+    md << "| " << f << " | " << nc.name << " | " << NoiseRoleName(nc.role) << " | "
+       << (g ? g->ok : 0) << "/" << (g ? g->runs : 0) << " | "
+       << CiCell(ComputeStats(Values(g, "nll_per_step")), 6) << " | "
        << Sig(ComputeStats(Values(g, "mean_nis")).mean) << " | ["
        << Sig(ComputeStats(Values(g, "nis_lo95")).mean) << ", "
        << Sig(ComputeStats(Values(g, "nis_hi95")).mean) << "] | "
@@ -102,8 +103,8 @@ void HandVsTuned(std::ostringstream& md, const StudyConfig& c, const StudyTables
     for (const Combo& cb : sc.combos) {
       if (cb.filter != int(fi)) continue;
       const NoiseConfig& nc = c.noises[cb.noise];
-      if (nc.role == "tuned") tuned.push_back(nc.name);
-      if (nc.role != "hand") continue;
+      if (nc.role == NoiseRole::kTuned) tuned.push_back(nc.name);
+      if (nc.role != NoiseRole::kHand) continue;
       const double v =
           ComputeStats(Values(FindGroup(t, GroupKey(sc.name, f, nc.name)), "nll_per_step")).mean;
       if (std::isfinite(v) && !(v >= best)) best = v, best_hand = nc.name;

@@ -44,10 +44,10 @@ TEST(ShippedStudies, TuningStudyHasHandAutoAndOracleEverywhere) {
   for (const ScenarioConfig& sc : c.scenarios) {
     bool hand = false, tuned = false, oracle = false;
     for (const Combo& cb : sc.combos) {
-      const std::string& role = c.noises[cb.noise].role;
-      hand |= role == "hand";
-      tuned |= role == "tuned" && cb.tune;
-      oracle |= role == "oracle";
+      const NoiseRole role = c.noises[cb.noise].role;
+      hand |= role == NoiseRole::kHand;
+      tuned |= role == NoiseRole::kTuned && cb.tune;
+      oracle |= role == NoiseRole::kOracle;
     }
     EXPECT_TRUE(hand && tuned && oracle) << sc.name;
     // An oracle Q must mean something: every truth has process noise.
@@ -80,7 +80,7 @@ TEST(StudyOptions, PoissonNoiseOracleStdAndRoles) {
     }
   }
   std::vector<std::string> roles;
-  for (const auto& n : c.noises) roles.push_back(n.name + ":" + n.role);
+  for (const auto& n : c.noises) roles.push_back(n.name + ":" + NoiseRoleName(n.role));
   EXPECT_EQ(roles, (std::vector<std::string>{"oracle:oracle", "std:hand", "hand:hand"}));
 }
 
