@@ -100,11 +100,9 @@ TEST(EmLinear, LikelihoodNeverFallsAndEmReachesTheLikelihoodTunersOptimum) {
   EXPECT_LE(worst_rise, 1e-11);  // rounding of a sum of 300 terms
 }
 
-TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
-  const double dt = 0.1;
-  Mat<4, 4> Q = Vec<double, 4>(0.01, 0.01, 0.02, 0.02).asDiagonal();
-  Mat<2, 2> R;
-  R << 0.04, 0.018, 0.018, 0.09;  // correlation 0.3
+// The KF on two constant-velocity axes, positions measured, from x0 =
+// (0, 1, 0, -0.5) with P0 = I and a diagonal Q and R as the initial guess.
+FilterSpec TwoAxisSpec() {
   FilterSpec spec;
   spec.measurement = "positions";
   spec.filter = KfOptions{};
@@ -113,6 +111,15 @@ TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
   spec.p0 = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   spec.q = {1e-3, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 1e-3, 0, 0, 0, 0, 0.1};
   spec.r = {0.2, 0.0, 0.0, 0.2};
+  return spec;
+}
+
+TEST(EmLinear, DiagonalQAndCorrelatedFullR) {
+  const double dt = 0.1;
+  Mat<4, 4> Q = Vec<double, 4>(0.01, 0.01, 0.02, 0.02).asDiagonal();
+  Mat<2, 2> R;
+  R << 0.04, 0.018, 0.018, 0.09;  // correlation 0.3
+  const FilterSpec spec = TwoAxisSpec();
   const std::vector<FilterData> data = {Simulate<Cv2, Cv2::Positions>(
       Integrator::kEuler, Vec<double, 4>(0.0, 1.0, 0.0, -0.5), dt, 3000, Q, R, 77)};
   TunerOptions ml;
@@ -169,14 +176,7 @@ TEST(EmMissing, PartialRowsReachTheLikelihoodTunersOptimum) {
   }
   ASSERT_GT(partial, 400);
   ASSERT_GT(empty, 60);
-  FilterSpec spec;
-  spec.measurement = "positions";
-  spec.filter = KfOptions{};
-  spec.transition.integrator = Integrator::kEuler;
-  spec.x0 = {0.0, 1.0, 0.0, -0.5};
-  spec.p0 = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-  spec.q = {1e-3, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 1e-3, 0, 0, 0, 0, 0.1};
-  spec.r = {0.2, 0.0, 0.0, 0.2};
+  const FilterSpec spec = TwoAxisSpec();
   for (const NoiseParam r_param : {NoiseParam::kFull, NoiseParam::kDiag, NoiseParam::kScalar}) {
     TunerOptions ml;
     ml.q_param = NoiseParam::kDiag;
