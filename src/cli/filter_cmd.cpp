@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <optional>
+#include <variant>
 
 #include "src/cli/commands.h"
 #include "src/cli/plot_run.h"
@@ -405,16 +406,26 @@ void CheckSmootherOptions(const FilterRequest& r, const ModelEntry& model, Filte
                     "Q (the particle smoother needs a positive definite process noise)", false);
 }
 
-// The particle smoother's trajectories, checked before they exist.
+// The particle smoother's memory, checked before any of it exists: its M
+// backward trajectories (M x rows x states doubles) and the filtered clouds
+// it keeps for them (particles x rows x (2 states + 1) doubles: each step's
+// particles, their predicted means and weights, particle_smoother.h).
 void CheckSmootherMemory(const FilterJob& job) {
-  const double bytes = double(job.spec.smoother_trajectories) * double(job.data.t.size()) *
-                       double(job.model->states.size()) * 8.0;
-  if (bytes > kMaxSmootherBytes)
-    throw InputError("--smoother-trajectories " + std::to_string(job.spec.smoother_trajectories) +
-                     " over " + std::to_string(job.data.t.size()) + " rows of " + job.data_path +
-                     " would take " + FormatNumber(bytes / 1073741824.0) + " GiB (at most " +
-                     FormatNumber(kMaxSmootherBytes / 1073741824.0) +
-                     "): fewer trajectories, or a shorter record");
+  const double rows = double(job.data.t.size()), states = double(job.model->states.size());
+  const int particles = std::get<ParticleOptions>(job.spec.filter).num_particles;
+  auto refuse_over = [&](double bytes, const std::string& what, const std::string& fix) {
+    if (bytes <= kMaxSmootherBytes) return;
+    throw InputError(what + " over " + std::to_string(job.data.t.size()) + " rows of " +
+                     job.data_path + " would take " + FormatNumber(bytes / 1073741824.0) +
+                     " GiB (at most " + FormatNumber(kMaxSmootherBytes / 1073741824.0) +
+                     "): " + fix + ", or a shorter record");
+  };
+  refuse_over(double(job.spec.smoother_trajectories) * rows * states * 8.0,
+              "--smoother-trajectories " + std::to_string(job.spec.smoother_trajectories),
+              "fewer trajectories");
+  refuse_over(double(particles) * rows * (2.0 * states + 1.0) * 8.0,
+              "the particle smoother's clouds of --particles " + std::to_string(particles),
+              "fewer particles");
 }
 
 // Every check of the options and the data (throws InputError), then the data.

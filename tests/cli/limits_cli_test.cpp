@@ -46,8 +46,8 @@ TEST(LimitsCli, AbsurdSizesAndSigmaPointParametersExitTwo) {
   EXPECT_FALSE(dir.Exists("s.csv"));
 }
 
-// Issue 40 items 16, 17 and 19: the particle smoother's trajectories are
-// checked before they are allocated, an option that does not apply is
+// Issue 40 items 16, 17 and 19: the particle smoother's trajectories and
+// clouds are checked before they are allocated, an option that does not apply is
 // refused, and a FIFO given as data is refused instead of blocking forever.
 TEST(LimitsCli, SmootherTrajectoriesAndFifoDataAreRefusedBeforeAnyWork) {
   TempDir dir;
@@ -67,6 +67,11 @@ TEST(LimitsCli, SmootherTrajectoriesAndFifoDataAreRefusedBeforeAnyWork) {
        "--smoother-trajectories must be in 2..100000, got 1000000000"},
       {"--filter pf --smoother-trajectories 100000 --particles 100 --data long.csv",
        "--smoother-trajectories 100000 over 4001 rows of long.csv would take 5.96"},
+      // 1e7 particles x 4001 rows x (2 x 2 + 1) doubles = 1490.49 GiB of clouds
+      // (a regression runs until memory runs out, or is killed).
+      {"--filter pf --particles 10000000 --data long.csv",
+       "the particle smoother's clouds of --particles 10000000 over 4001 rows of long.csv would "
+       "take 1490.49 GiB (at most 4): fewer particles, or a shorter record"},
       {"--filter ekf --smoother-trajectories 50",
        "--smoother-trajectories applies to the particle smoother (--filter pf), not ekf"},
   };
