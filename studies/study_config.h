@@ -151,6 +151,12 @@ namespace estlab {
 inline constexpr int kMaxRuns = 100000000;
 inline constexpr int kMaxSteps = 100000000;
 inline constexpr int kMaxSubsteps = 100000;
+// What one simulated run may hold: its truth and its filter's records,
+// about 8 (4 + 3n + 2n^2 + 3m + 2m^2) bytes a step for n states and m
+// outputs (the model's widest measurement); `steps` beyond it is refused
+// before anything runs (a run that ran out of memory was a failed run of a
+// complete study).
+inline constexpr double kMaxRunBytes = 4.0 * 1073741824.0;
 
 struct StudySettings {
   std::string name;

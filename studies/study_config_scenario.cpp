@@ -100,6 +100,19 @@ std::vector<double> ParseState(const SectionValues& v, const ConfigErrors& err,
   });
 }
 
+// `steps` against kMaxRunBytes (study_config.h).
+void CheckRunMemory(const SectionValues& v, const ModelEntry& model, int steps) {
+  const double n = double(model.states.size());
+  double m = 0.0;
+  for (const MeasurementDesc& d : model.measurements) m = std::max(m, double(d.outputs.size()));
+  const double bytes = double(steps) * 8.0 * (4.0 + 3.0 * n + 2.0 * n * n + 3.0 * m + 2.0 * m * m);
+  if (bytes > kMaxRunBytes)
+    v.Fail("steps", std::to_string(steps) + " steps of a " + std::to_string(model.states.size()) +
+                        "-state model would hold about " + FormatNumber(bytes / 1073741824.0) +
+                        " GiB per run (at most " + FormatNumber(kMaxRunBytes / 1073741824.0) +
+                        "): fewer steps, or a larger dt");
+}
+
 // The truth's parameters, then (after checking that the keys of the other
 // kind of run are absent) its initial state and, when simulated, dt and steps.
 void SetTruthStart(const SectionValues& v, const ConfigErrors& err, bool recorded,
@@ -136,6 +149,7 @@ void SetTruthStart(const SectionValues& v, const ConfigErrors& err, bool recorde
     sc->steps = Checked(*v.Get("steps"), err,
                         [](const std::string& t) { return ParseCount(t, "steps", 1, kMaxSteps); });
     truth.t_end = sc->steps * truth.dt;
+    CheckRunMemory(v, model, sc->steps);
   }
 }
 

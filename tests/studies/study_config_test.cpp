@@ -127,6 +127,11 @@ TEST(StudyConfig, ErrorsNameFileLineAndKey) {
        "s.ini:4: [study] runs: must be in [1, 100000000], got 3000000000"},
       {"steps = 25", "steps = 4294967696",
        "s.ini:13: [scenario.pend] steps: must be in [1, 100000000], got 4294967696"},
+      // Issue 40 item 4: a run too large to hold is refused before any runs
+      // (it used to end as a bad_alloc truth_failed run of a complete study).
+      {"steps = 25", "steps = 100000000",
+       "s.ini:13: [scenario.pend] steps: 100000000 steps of a 2-state model would hold about "
+       "23.8419 GiB per run (at most 4): fewer steps, or a larger dt"},
       {"keep-runs = 0,2", "keep-runs = 0,4294967296",
        "s.ini:5: [study] keep-runs: must be in [0, 99999999], got 4294967296"},
       {"particles = 100", "particles = 1000000000",
