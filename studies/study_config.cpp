@@ -48,15 +48,9 @@ StudySettings ParseStudy(const SectionValues& v) {
   s.name = v.Get("name")->text;
   if (!IsName(s.name)) v.Fail("name", "'" + s.name + "' must be letters, digits, '_' and '-'");
   if (v.Has("description")) s.description = v.Get("description")->text;
-  if (v.Has("seed"))
-    s.seed = Checked(*v.Get("seed"), err,
-                     [](const std::string& t) { return uint64_t(ParseInteger(t, "seed", 0)); });
-  if (v.Has("runs"))
-    s.runs = Checked(*v.Get("runs"), err,
-                     [](const std::string& t) { return ParseCount(t, "runs", 1, kMaxRuns); });
-  if (v.Has("jobs"))
-    s.jobs = Checked(*v.Get("jobs"), err,
-                     [](const std::string& t) { return ParseCount(t, "jobs", 1, 1024); });
+  v.Read("seed", &s.seed, ParseInteger, 0);
+  v.Read("runs", &s.runs, ParseCount, 1, kMaxRuns);
+  v.Read("jobs", &s.jobs, ParseCount, 1, 1024);
   if (v.Has("keep-runs")) {
     s.keep_runs = Checked(*v.Get("keep-runs"), err, [](const std::string& t) {
       std::vector<int> runs;
@@ -66,10 +60,7 @@ StudySettings ParseStudy(const SectionValues& v) {
       return runs;
     });
   }
-  if (v.Has("step-metrics-every"))
-    s.step_metrics_every = Checked(*v.Get("step-metrics-every"), err, [](const std::string& t) {
-      return ParseCount(t, "step-metrics-every", 1, kMaxSteps);
-    });
+  v.Read("step-metrics-every", &s.step_metrics_every, ParseCount, 1, kMaxSteps);
   return s;
 }
 
@@ -126,9 +117,7 @@ FilterConfig ParseFilter(const SectionValues& v) {
     }
     f.description += " " + e.key + "=" + e.value;
   }
-  if (v.Has("scenarios"))
-    f.scenarios = Checked(*v.Get("scenarios"), err,
-                          [](const std::string& t) { return ParseNameList(t, "scenarios"); });
+  v.Read("scenarios", &f.scenarios, ParseNameList);
   return f;
 }
 
@@ -168,12 +157,8 @@ NoiseConfig ParseNoise(const SectionValues& v, const std::vector<FilterConfig>& 
     });
   }
   nc.init_scale = v.Has("init-scale") ? v.Get("init-scale")->text : std::string();
-  if (v.Has("tune-per-run"))
-    nc.per_run = Checked(*v.Get("tune-per-run"), err,
-                         [](const std::string& t) { return ParseBool(t, "tune-per-run"); });
-  if (v.Has("scenarios"))
-    nc.scenarios = Checked(*v.Get("scenarios"), err,
-                           [](const std::string& t) { return ParseNameList(t, "scenarios"); });
+  v.Read("tune-per-run", &nc.per_run, ParseBool);
+  v.Read("scenarios", &nc.scenarios, ParseNameList);
   if (v.Has("filters")) {
     nc.filters = Checked(*v.Get("filters"), err,
                          [](const std::string& t) { return ParseNameList(t, "filters"); });

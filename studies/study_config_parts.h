@@ -85,6 +85,20 @@ struct Value {
   std::string where;  // "[scenario.pend] dt"
 };
 
+// Runs `fn`, turning an InputError into "FILE:LINE: [section] key: message".
+template <class Fn>
+auto Checked(const Value& v, const ConfigErrors& err, Fn&& fn) {
+  try {
+    return fn(v.text);
+  } catch (const InputError& e) {
+    std::string msg = e.what();
+    // Messages of the shared parsers start with the option name we passed.
+    const std::string prefix = v.where.substr(v.where.rfind(' ') + 1) + ": ";
+    if (msg.compare(0, prefix.size(), prefix) == 0) msg = msg.substr(prefix.size());
+    err.Fail(v.line, v.where + ": " + msg);
+  }
+}
+
 class SectionValues {
  public:
   SectionValues(const Section& sec, const po::variables_map& vm, const ConfigErrors& err)
@@ -108,6 +122,16 @@ class SectionValues {
   [[noreturn]] void FailSection(const std::string& message) const {
     err_.Fail(sec_.line, "[" + sec_.full + "]: " + message);
   }
+  // When `key` is given: *out = parse(its text, key, args...), a parse
+  // error reported at the key's line as Checked does. Returns whether it
+  // was given. v.Read("truth-substeps", &tr.substeps, ParseCount, 1, kMaxSubsteps);
+  template <class T, class Parse, class... Args>
+  bool Read(const std::string& key, T* out, Parse&& parse, Args&&... args) const {
+    const Value* v = Get(key);
+    if (v == nullptr) return false;
+    *out = Checked(*v, err_, [&](const std::string& text) { return parse(text, key, args...); });
+    return true;
+  }
   const Section& section() const { return sec_; }
   const ConfigErrors& errors() const { return err_; }
 
@@ -116,20 +140,6 @@ class SectionValues {
   const ConfigErrors& err_;
   std::map<std::string, Value> values_;
 };
-
-// Runs `fn`, turning an InputError into "FILE:LINE: [section] key: message".
-template <class Fn>
-auto Checked(const Value& v, const ConfigErrors& err, Fn&& fn) {
-  try {
-    return fn(v.text);
-  } catch (const InputError& e) {
-    std::string msg = e.what();
-    // Messages of the shared parsers start with the option name we passed.
-    const std::string prefix = v.where.substr(v.where.rfind(' ') + 1) + ": ";
-    if (msg.compare(0, prefix.size(), prefix) == 0) msg = msg.substr(prefix.size());
-    err.Fail(v.line, v.where + ": " + msg);
-  }
-}
 
 std::vector<std::string> ParseNameList(const std::string& text, const std::string& what);
 std::string JoinDoubles(const std::vector<double>& v);

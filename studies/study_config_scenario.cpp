@@ -185,20 +185,10 @@ void SetTruthIntegrator(const SectionValues& v, const ConfigErrors& err, Scenari
 void SetTruthTransition(const SectionValues& v, const ConfigErrors& err, ScenarioConfig* sc) {
   SetTruthIntegrator(v, err, sc);
   TransitionOptions& tr = sc->truth.transition;
-  if (v.Has("truth-rtol"))
-    tr.rtol = Checked(*v.Get("truth-rtol"), err,
-                      [](const std::string& t) { return ParseNumber(t, "truth-rtol"); });
-  if (v.Has("truth-atol"))
-    tr.atol = Checked(*v.Get("truth-atol"), err,
-                      [](const std::string& t) { return ParseNumber(t, "truth-atol"); });
-  if (v.Has("truth-substeps"))
-    tr.substeps = Checked(*v.Get("truth-substeps"), err, [](const std::string& t) {
-      return ParseCount(t, "truth-substeps", 1, kMaxSubsteps);
-    });
-  if (v.Has("truth-max-steps"))
-    tr.max_steps = Checked(*v.Get("truth-max-steps"), err, [](const std::string& t) {
-      return ParseInteger(t, "truth-max-steps", 1);
-    });
+  v.Read("truth-rtol", &tr.rtol, ParseNumber);
+  v.Read("truth-atol", &tr.atol, ParseNumber);
+  v.Read("truth-substeps", &tr.substeps, ParseCount, 1, kMaxSubsteps);
+  v.Read("truth-max-steps", &tr.max_steps, ParseInteger, 1);
   // How the input goes between samples, for the truth and every filter.
   if (v.Has("input-hold"))
     tr.input_hold =
@@ -313,8 +303,7 @@ const MeasurementDesc& SetMeasurement(const SectionValues& v, const ConfigErrors
 
 // The oracle R (the measurement variances), the noise's distribution
 // (`meas-noise = gaussian | poisson`) and measure-at-t0.
-void SetMeasurementNoise(const SectionValues& v, const ConfigErrors& err,
-                         const MeasurementDesc& meas, ScenarioConfig* sc) {
+void SetMeasurementNoise(const SectionValues& v, const MeasurementDesc& meas, ScenarioConfig* sc) {
   SimulationSpec& truth = sc->truth;
   const int m = int(meas.outputs.size());
   sc->oracle_r.assign(m * m, 0.0);
@@ -332,9 +321,7 @@ void SetMeasurementNoise(const SectionValues& v, const ConfigErrors& err,
       v.Fail("meas-noise", "expected gaussian or poisson, got '" + kind + "'");
     }
   }
-  if (v.Has("measure-at-t0"))
-    sc->measure_at_t0 = Checked(*v.Get("measure-at-t0"), err,
-                                [](const std::string& t) { return ParseBool(t, "measure-at-t0"); });
+  v.Read("measure-at-t0", &sc->measure_at_t0, ParseBool);
 }
 
 // The filters' prior: prior-x0 (the truth's x0 by default) and P0 from
@@ -377,7 +364,7 @@ ScenarioConfig BuildScenario(const SectionValues& v, const ConfigErrors& err) {
   SetTruthTransition(v, err, &sc);
   SetProcessNoise(v, err, &sc);
   const MeasurementDesc& meas = SetMeasurement(v, err, &sc);
-  SetMeasurementNoise(v, err, meas, &sc);
+  SetMeasurementNoise(v, meas, &sc);
   if (v.Has("input")) SetScenarioInput(v, *v.Get("input"), err, recorded, &sc);
 
   if (recorded) ReadRecordedData(v, &sc);

@@ -33,6 +33,7 @@
 #include "studies/study_integrity.h"
 #include "studies/study_metrics.h"
 #include "studies/study_runner_parts.h"
+#include "studies/study_schedule.h"
 #include "studies/study_tuning.h"
 
 namespace fs = std::filesystem;
@@ -656,11 +657,33 @@ struct RunFiles {
   std::ofstream runs, steps, timing;
 };
 
+// The pool's order (study_schedule.h): the tunings, costliest first, then
+// the runs scenario by scenario, each scenario's costliest first (recorded
+// runs of different lengths). Runs keep their scenarios' order so that the
+// writer, which appends in run order, holds at most one scenario's finished
+// runs: a study's results stream to disk.
+std::vector<size_t> TaskOrder(const StudyConfig& c, const StudyTunings* tunings, size_t n_tune,
+                              const std::vector<RunTask>& runs) {
+  std::vector<double> tuning_cost(n_tune);
+  for (size_t i = 0; i < n_tune; ++i) {
+    const ScenarioConfig& sc = c.scenarios[size_t(tunings->ScenarioOf(i))];
+    tuning_cost[i] = TuningCost(sc, sc.combos[size_t(tunings->ComboOf(i))]);
+  }
+  std::vector<size_t> order = LongestFirst(tuning_cost);
+  for (size_t first = 0, end = 0; first < runs.size(); first = end) {
+    std::vector<double> cost;
+    for (end = first; end < runs.size() && runs[end].scenario == runs[first].scenario; ++end)
+      cost.push_back(RunCost(c.scenarios[size_t(runs[end].scenario)], runs[end].run));
+    for (size_t r : LongestFirst(cost)) order.push_back(n_tune + first + r);
+  }
+  return order;
+}
+
 // Step 3: one task pool (src/core/task_pool.h) for the pending tunings and
-// the runs. A run waits only for the tunings of its own scenario; the
-// tunings come first in the pool's order. The rows are appended in run
-// order whatever finished first, so the files do not depend on jobs.
-// Returns the runs written.
+// the runs. A run waits only for the tunings of its own scenario; the pool
+// starts the tunings first, then the runs (TaskOrder).
+// The rows are appended in run order whatever finished first, so the files
+// do not depend on jobs or on the order. Returns the runs written.
 long RunTasks(const RunContext& ctx, StudyConfig* tuned, StudyTunings* tunings,
               const std::vector<RunTask>& runs, int jobs, const StudyRunOptions& options,
               Progress* progress, StudyRunSummary* summary) {
@@ -684,7 +707,9 @@ long RunTasks(const RunContext& ctx, StudyConfig* tuned, StudyTunings* tunings,
                   wall[task] =
                       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 },
-                {.after = after, .order = {}, .stop = options.stop});
+                {.after = after,
+                 .order = TaskOrder(*ctx.config, tunings, n_tune, runs),
+                 .stop = options.stop});
   long written = 0;
   for (size_t r = 0; r < runs.size(); ++r) {
     while (!pool.WaitFor(n_tune + r, std::chrono::milliseconds(200)) && !pool.Ended())

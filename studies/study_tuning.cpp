@@ -335,6 +335,7 @@ StudyTunings::~StudyTunings() = default;
 size_t StudyTunings::Pending() const { return state_->pending.size(); }
 
 int StudyTunings::ScenarioOf(size_t i) const { return state_->keys[state_->pending[i]].s; }
+int StudyTunings::ComboOf(size_t i) const { return state_->keys[state_->pending[i]].c; }
 
 void StudyTunings::ApplyReused(StudyConfig* config) const {
   const State& st = *state_;

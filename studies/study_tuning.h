@@ -56,6 +56,7 @@ class StudyTunings {
   ~StudyTunings();
   size_t Pending() const;          // tunings still to run
   int ScenarioOf(size_t i) const;  // the scenario of pending tuning i
+  int ComboOf(size_t i) const;     // its combo in that scenario
   void ApplyReused(StudyConfig* config) const;
   // Tunes pending combo i, saves it in DIR/tuning/, and puts the tuned Q/R
   // and parameters into its spec (or its failure into tune_failure).
