@@ -107,7 +107,7 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
       break;
     case Estimator::kOutputError:
       throw InputError(
-          "the output-error estimator simulates (studies/output_error.h): it does not run "
+          "the output-error estimator simulates (studies/run/output_error.h): it does not run "
           "through the tuner");
   }
   result.wall_s =

@@ -1,5 +1,5 @@
 // One pool of worker threads for tasks that may wait on other tasks: a
-// study's tunings and its runs (studies/study_runner.cpp: a run waits only
+// study's tunings and its runs (studies/run/study_runner.cpp: a run waits only
 // for the tunings its scenario uses), and a tuner's starts
 // (adaptive/tuner_starts.h). estlab has no other thread pool.
 //

@@ -19,7 +19,6 @@
 #define ESTLAB_FILTERS_FILTER_UTIL_H_
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -29,6 +28,7 @@
 #include "src/core/types.h"
 #include "src/filters/filter.h"
 #include "src/filters/missing.h"
+#include "src/filters/symmetric_eigen.h"
 
 namespace estlab {
 
@@ -249,13 +249,15 @@ bool CovarianceSqrt(const Mat<N, N>& C, Mat<N, N>* L, std::string* why) {
     *L = llt.matrixL();
     return true;
   }
-  const Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(C);
-  if (eig.info() != Eigen::Success) return fail("eigendecomposition of the covariance failed");
-  const double min_eig = eig.eigenvalues().minCoeff();
+  Vec<double, N> values;
+  Mat<N, N> vectors;
+  if (!SymmetricEigen<N>(C, &values, &vectors))
+    return fail("eigendecomposition of the covariance failed");
+  const double min_eig = values.minCoeff();
   if (min_eig < -1e-12 * scale)
     return fail("covariance is not positive semidefinite (smallest eigenvalue " +
                 std::to_string(min_eig) + ")");
-  *L = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  *L = vectors * values.cwiseMax(0.0).cwiseSqrt().asDiagonal();
   return true;
 }
 

@@ -41,7 +41,6 @@
 #include <cmath>
 #include <memory>
 #include <string>
-#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
 #include "src/filters/filter.h"
@@ -50,6 +49,7 @@
 #include "src/filters/gaussian_update.h"
 #include "src/filters/kalman_step.h"
 #include "src/filters/linearize.h"
+#include "src/filters/matrix_exponential.h"
 #include "src/ode/transition.h"
 
 namespace estlab {
@@ -217,7 +217,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       augmented.template block<kN, kU>(0, kN) = B_ * dt;
       augmented.template block<kU, kU>(kN, kN + kU).setIdentity();  // (I / dt) dt
       augmented.template block<kN, 1>(0, kN + 2 * kU) = c_ * dt;
-      const Mat<kA, kA> e = augmented.exp();
+      const Mat<kA, kA> e = MatrixExponential<kA>(augmented);
       step_.phi = e.template topLeftCorner<kN, kN>();
       step_.gamma = e.template block<kN, kU>(0, kN);
       step_.gamma1 = e.template block<kN, kU>(0, kN + kU);
@@ -228,7 +228,7 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
       augmented.template topLeftCorner<kN, kN>() = A_ * dt;
       augmented.template block<kN, kU>(0, kN) = B_ * dt;
       augmented.template block<kN, 1>(0, kN + kU) = c_ * dt;
-      const Mat<kA, kA> e = augmented.exp();
+      const Mat<kA, kA> e = MatrixExponential<kA>(augmented);
       step_.phi = e.template topLeftCorner<kN, kN>();
       step_.gamma = e.template block<kN, kU>(0, kN);
       step_.gamma1.setZero();

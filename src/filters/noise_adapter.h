@@ -23,7 +23,6 @@
 #ifndef ESTLAB_FILTERS_NOISE_ADAPTER_H_
 #define ESTLAB_FILTERS_NOISE_ADAPTER_H_
 
-#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -31,6 +30,7 @@
 #include "src/core/types.h"
 #include "src/filters/filter.h"
 #include "src/filters/filter_options.h"
+#include "src/filters/symmetric_eigen.h"
 
 namespace estlab {
 
@@ -39,8 +39,9 @@ namespace estlab {
 template <int D>
 bool ClipToPositiveDefinite(Mat<D, D>* A, double floor) {
   Mat<D, D> sym = 0.5 * (*A + A->transpose());
-  Eigen::SelfAdjointEigenSolver<Mat<D, D>> eig(sym);
-  Vec<double, D> values = eig.eigenvalues();
+  Vec<double, D> values;
+  Mat<D, D> vectors;
+  SymmetricEigen<D>(sym, &values, &vectors);
   bool clipped = false;
   for (int i = 0; i < D; ++i) {
     if (!(values(i) >= floor)) {
@@ -48,7 +49,7 @@ bool ClipToPositiveDefinite(Mat<D, D>* A, double floor) {
       clipped = true;
     }
   }
-  if (clipped) sym = eig.eigenvectors() * values.asDiagonal() * eig.eigenvectors().transpose();
+  if (clipped) sym = vectors * values.asDiagonal() * vectors.transpose();
   *A = 0.5 * (sym + sym.transpose());
   return clipped;
 }

@@ -12,7 +12,6 @@
 #ifndef ESTLAB_SIM_SIMULATOR_IMPL_H_
 #define ESTLAB_SIM_SIMULATOR_IMPL_H_
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +21,7 @@
 
 #include "models/model_traits.h"
 #include "src/core/random.h"
+#include "src/filters/symmetric_eigen.h"
 #include "src/ode/transition.h"
 #include "src/sim/simulation.h"
 
@@ -57,9 +57,11 @@ bool ProcessNoiseFactor(const SimulationSpec& spec, Mat<N, N>* factor) {
     Mat<N, N> Q;
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < N; ++j) Q(i, j) = spec.process_noise_cov[i * N + j];
-    Eigen::SelfAdjointEigenSolver<Mat<N, N>> eig(0.5 * (Q + Q.transpose()));
-    *factor = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
-              eig.eigenvectors().transpose();
+    const Mat<N, N> sym = 0.5 * (Q + Q.transpose());
+    Vec<double, N> values;
+    Mat<N, N> vectors;
+    SymmetricEigen<N>(sym, &values, &vectors);
+    *factor = vectors * values.cwiseMax(0.0).cwiseSqrt().asDiagonal() * vectors.transpose();
     return true;
   }
   if (spec.process_noise_var.empty()) return false;
