@@ -16,7 +16,7 @@
 //   als           autocovariance least squares on a suboptimal filter's
 //                 innovations (adaptive/als.h)
 //   output-error  free simulation against the measurements, least squares
-//                 (studies/output_error.h; no filter, not a TuneModel run)
+//                 (studies/run/output_error.h; no filter, not a TuneModel run)
 //
 // Adding an estimator "foo" (a dry run, the files it touches):
 //   1. adaptive/foo.h: RunFoo(const Objective<Model, Meas>&, const

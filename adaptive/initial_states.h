@@ -3,7 +3,7 @@
 // theta names and where they sit in theta. One rule for both fits that
 // estimate x0: the prediction-error fit (x0 is the filter's prior mean,
 // adaptive/likelihood.h) and the output-error fit (x0 is where the free
-// simulation starts, studies/output_error.h).
+// simulation starts, studies/run/output_error.h).
 //
 //   theta slice = [row 0: x0[i_1] .. x0[i_k] | row 1: ... ]   natural scale,
 //                 unbounded; one row, or one per dataset (per_file)

@@ -1,6 +1,6 @@
 // One estimated model parameter on the optimiser's scale, shared by the
 // prediction-error fit (physical_params.h) and the output-error fit
-// (studies/output_error.h), so that both check, scale and bound a parameter
+// (studies/run/output_error.h), so that both check, scale and bound a parameter
 // alike:
 //
 //   theta = log p   when p is constrained > 0, else theta = p

@@ -40,8 +40,8 @@
 #include "src/filters/sigma_point.h"
 #include "src/ode/transition_impl.h"
 #include "src/registry/registry.h"
-#include "studies/study_config.h"
-#include "studies/study_runner.h"
+#include "studies/config/study_config.h"
+#include "studies/run/study_runner.h"
 
 namespace estlab {
 namespace {

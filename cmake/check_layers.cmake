@@ -13,14 +13,20 @@
 #   6 adaptive   adaptive         the likelihood and the Q/R tuner
 #   7 registry   src/registry     the model list and per-model entry points
 #   8 options    src/options      the filter key table, FilterSettings -> FilterSpec
-#   9 studies    studies          Monte Carlo studies, reports, figures
-#  10 cli        src/cli          the estlab command
-#  11 python     src/python       the Python module (import estlab)
+#   9 config     studies/config   the study file parser (StudyConfig)
+#  10 results    studies/results  the results folder: columns, row files,
+#                                 study.state, checksums, run coverage
+#  11 report     studies/report   report.md, summary statistics, figures
+#  12 study run  studies/run      running a study: runner, tuning, task order,
+#                                 Slurm, merge of shards, output error
+#  13 cli        src/cli          the estlab command
+#  14 python     src/python       the Python module (import estlab)
 #
 # Run by hand: cmake -DESTLAB_SOURCE_DIR=. -P cmake/check_layers.cmake
 set(ESTLAB_LAYERS
   "src/core=0" "src/io=1" "src/modelfile=1" "models=2" "src/ode=3" "src/filters=4" "src/run=5" "src/sim=5"
-  "adaptive=6" "src/registry=7" "src/options=8" "studies=9" "src/cli=10" "src/python=11")
+  "adaptive=6" "src/registry=7" "src/options=8" "studies/config=9" "studies/results=10"
+  "studies/report=11" "studies/run=12" "src/cli=13" "src/python=14")
 
 function(estlab_layer_of path out_rank out_folder)
   set(rank -1)
@@ -43,6 +49,9 @@ endfunction()
 if(NOT ESTLAB_SOURCE_DIR)
   set(ESTLAB_SOURCE_DIR ${CMAKE_SOURCE_DIR})
 endif()
+# Absolute: with a relative folder (-DESTLAB_SOURCE_DIR=.) the globs below
+# find nothing and the check would pass without looking.
+get_filename_component(ESTLAB_SOURCE_DIR "${ESTLAB_SOURCE_DIR}" ABSOLUTE)
 file(GLOB_RECURSE sources RELATIVE ${ESTLAB_SOURCE_DIR}
   ${ESTLAB_SOURCE_DIR}/src/*.h ${ESTLAB_SOURCE_DIR}/src/*.cpp
   ${ESTLAB_SOURCE_DIR}/models/*.h ${ESTLAB_SOURCE_DIR}/adaptive/*.h

@@ -17,7 +17,7 @@
 #include "src/options/truth_flags.h"
 #include "src/registry/registry.h"
 #include "src/run/degeneracy.h"
-#include "studies/run_figures.h"
+#include "studies/report/run_figures.h"
 
 namespace po = boost::program_options;
 

@@ -2,7 +2,7 @@
 
 #include <iostream>
 
-#include "studies/run_figures.h"
+#include "studies/report/run_figures.h"
 
 namespace estlab::cli {
 

@@ -12,7 +12,7 @@
 
 #include "src/registry/registry.h"
 #include "src/run/filter_spec.h"
-#include "studies/output_error.h"
+#include "studies/run/output_error.h"
 
 namespace estlab::cli {
 

@@ -16,12 +16,13 @@
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/io/shell.h"
-#include "studies/run_figures.h"
-#include "studies/study_config.h"
-#include "studies/study_figures.h"
-#include "studies/study_results.h"
-#include "studies/study_runner.h"
-#include "studies/study_slurm.h"
+#include "studies/config/study_config.h"
+#include "studies/report/run_figures.h"
+#include "studies/report/study_figures.h"
+#include "studies/results/study_results.h"
+#include "studies/run/study_merge.h"
+#include "studies/run/study_runner.h"
+#include "studies/run/study_slurm.h"
 
 namespace po = boost::program_options;
 

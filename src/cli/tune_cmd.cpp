@@ -27,7 +27,7 @@
 #include "src/options/filter_flags.h"
 #include "src/options/truth_flags.h"
 #include "src/registry/registry.h"
-#include "studies/run_figures.h"
+#include "studies/report/run_figures.h"
 
 namespace po = boost::program_options;
 

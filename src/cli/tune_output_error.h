@@ -10,7 +10,7 @@
 #include "src/cli/tune_validate.h"
 #include "src/cli/tune_x0.h"
 #include "src/registry/registry.h"
-#include "studies/output_error.h"
+#include "studies/run/output_error.h"
 
 namespace estlab::cli {
 

@@ -10,7 +10,7 @@
 #include "src/core/parse.h"
 #include "src/core/types.h"
 #include "src/io/output_file.h"
-#include "studies/gnuplot_figure.h"
+#include "studies/report/gnuplot_figure.h"
 
 namespace estlab::cli {
 namespace {

@@ -9,7 +9,7 @@
 #include "src/io/memory_files.h"
 #include "src/options/filter_flags.h"
 #include "src/options/truth_flags.h"
-#include "studies/output_error.h"
+#include "studies/run/output_error.h"
 
 namespace estlab::cli {
 namespace {

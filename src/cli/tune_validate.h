@@ -24,7 +24,7 @@
 #include "adaptive/tuner.h"
 #include "src/io/json.h"
 #include "src/registry/registry.h"
-#include "studies/study_metrics.h"
+#include "studies/report/study_metrics.h"
 
 namespace estlab::cli {
 

@@ -1,4 +1,4 @@
-// Free simulation and output-error least squares (studies/output_error.h) on
+// Free simulation and output-error least squares (studies/run/output_error.h) on
 // pendulum data simulated here: windows started from exact states reproduce
 // the trajectory, the fit recovers L and b from angle data with known noise,
 // and data it cannot use is an error naming the file and line.
@@ -10,7 +10,7 @@
 
 #include "src/core/random.h"
 #include "src/registry/registry.h"
-#include "studies/output_error.h"
+#include "studies/run/output_error.h"
 #include "tests/error_text.h"
 
 namespace estlab {

@@ -16,7 +16,7 @@
 #include "src/core/types.h"
 #include "src/io/csv_reader.h"
 #include "src/modelfile/model_file.h"
-#include "studies/study_config.h"
+#include "studies/config/study_config.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {

@@ -1,6 +1,6 @@
-// The run figures' numbers (studies/run_figures.h): the autocorrelation
+// The run figures' numbers (studies/report/run_figures.h): the autocorrelation
 // against its definition and an AR(1) process, and the figure files.
-#include "studies/run_figures.h"
+#include "studies/report/run_figures.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The ini pieces of the study parser (studies/study_config_parts.h): sections
+// The ini pieces of the study parser (studies/config/study_config_parts.h): sections
 // and entries with their lines, comments, errors naming the line, and the
 // '|' alternatives of scenario keys with their labels and product order.
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "studies/study_config_parts.h"
+#include "studies/config/study_config_parts.h"
 
 namespace estlab::testing {
 namespace {

@@ -1,6 +1,6 @@
-// Study configuration parsing and checking (studies/study_config.h), and the
-// statistics of studies/study_results.h.
-#include "studies/study_config.h"
+// Study configuration parsing and checking (studies/config/study_config.h), and the
+// statistics of studies/report/study_finalize.h.
+#include "studies/config/study_config.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 
 #include "error_text.h"
 #include "src/core/types.h"
-#include "studies/study_results.h"
+#include "studies/report/study_finalize.h"
 #include "study_test_util.h"
 
 namespace estlab {

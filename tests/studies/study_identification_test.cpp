@@ -1,9 +1,9 @@
-// Noise identification in studies (studies/study_identification.h,
+// Noise identification in studies (studies/run/study_identification.h,
 // tune-per-run, tune-estimator, init-scale, tune-tolerance): each run's Q/R
 // equal what `estlab tune` finds on that run's data, the errors against the
 // truth are the hand-computed ones, identification.csv's scores follow from
 // runs.csv, results do not depend on --jobs, and bad keys are refused.
-#include "studies/study_identification.h"
+#include "studies/run/study_identification.h"
 
 #include <gtest/gtest.h>
 
@@ -13,8 +13,8 @@
 
 #include "../cli/cli_test_util.h"
 #include "error_text.h"
-#include "studies/study_config.h"
-#include "studies/study_results.h"
+#include "studies/config/study_config.h"
+#include "studies/results/study_results.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {

@@ -12,9 +12,9 @@
 
 #include "error_text.h"
 #include "src/sim/input_signal.h"
-#include "studies/study_config.h"
-#include "studies/study_metrics.h"
-#include "studies/study_runner_parts.h"
+#include "studies/config/study_config.h"
+#include "studies/report/study_metrics.h"
+#include "studies/run/study_runner_parts.h"
 #include "study_test_util.h"
 
 namespace estlab {

@@ -13,9 +13,9 @@
 
 #include "../cli/cli_test_util.h"
 #include "src/core/types.h"
-#include "studies/study_config.h"
-#include "studies/study_metrics.h"
-#include "studies/study_results.h"
+#include "studies/config/study_config.h"
+#include "studies/report/study_metrics.h"
+#include "studies/results/study_results.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {

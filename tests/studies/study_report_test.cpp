@@ -9,8 +9,8 @@
 
 #include "../cli/cli_test_util.h"
 #include "src/core/types.h"
-#include "studies/study_config.h"
-#include "studies/study_runner.h"
+#include "studies/config/study_config.h"
+#include "studies/run/study_runner.h"
 #include "study_test_util.h"
 
 namespace estlab::testing {

@@ -1,6 +1,6 @@
-// The study's task order (studies/study_schedule.h): costs by hand from the
+// The study's task order (studies/run/study_schedule.h): costs by hand from the
 // formulas of the header, and the longest-first order.
-#include "studies/study_schedule.h"
+#include "studies/run/study_schedule.h"
 
 #include <gtest/gtest.h>
 
