@@ -1,5 +1,5 @@
 // `--plot DIR` of estlab filter, smooth and tune: one run's figures
-// (studies/run_figures.h) from the run's rows, its data and its model.
+// (studies/report/run_figures.h) from the run's rows, its data and its model.
 //
 // Usage:
 //   PlotRequest plot{.dir = "plots", .what = "ekf on d.csv"};

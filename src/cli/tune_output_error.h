@@ -1,4 +1,4 @@
-// The report of `estlab tune --estimator output-error` (studies/output_error.h):
+// The report of `estlab tune --estimator output-error` (studies/run/output_error.h):
 // text and JSON, in the shape of the prediction-error report so that scripts
 // read both alike ("tuned": {"params": ...}, "std_errors", "validation").
 #ifndef ESTLAB_SRC_CLI_TUNE_OUTPUT_ERROR_H_

@@ -2,7 +2,7 @@
 // initial, the tuned and (when known) the true noise and parameters. Per file
 // and setting, over the updates after the tuner's --burn-in:
 //
-//   nll_per_step, mean_nis with its 95 % bounds   (studies/study_metrics.h)
+//   nll_per_step, mean_nis with its 95 % bounds   (studies/report/study_metrics.h)
 //   pred_rmse_<output>   one-step-ahead prediction RMSE of each output
 //   rmse, mean_nees      when the file has truth columns
 //   free_rmse_<output>   the free simulation over `horizon` s windows from
@@ -32,7 +32,7 @@ struct ValidationRun {
   FilterSummary summary;   // the whole run (status, truth metrics)
   NoTruthMetrics metrics;  // after the burn-in
   // Free-simulation RMSE per output over windows of `horizon` s from the
-  // recorded states (studies/output_error.h); empty without state columns.
+  // recorded states (studies/run/output_error.h); empty without state columns.
   std::vector<double> free_rmse;
   // Free-simulation RMSE per output over the whole file from the run's prior
   // mean (summary.x0), the file's input held between samples.
