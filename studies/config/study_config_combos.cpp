@@ -1,7 +1,9 @@
 // The filter x noise combinations of a scenario: each one's FilterSpec from
 // the scenario's, filter's and noise section's keys (study_config_parts.h).
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <variant>
 
 #include "adaptive/tuner.h"
 #include "src/core/parse.h"
@@ -105,6 +107,7 @@ struct ComboBuilder {
   void AddNoiseKeys();
   void AddOracleOrTuned(const std::string& k, const std::string& which, const Value* val);
   void BuildSpec(FilterSpec* spec) const;
+  void CheckParticleSmoother(const FilterSpec& spec) const;
   void SetOracleNoise(FilterSpec* spec) const;
   void ApplyInitScale(FilterSpec* spec) const;
   std::vector<EstimatedParam> EstimatedParams() const;
@@ -269,6 +272,29 @@ void ComboBuilder::BuildSpec(FilterSpec* spec) const {
   } catch (const InputError& e) {
     FailCombo(e.what());
   }
+  CheckParticleSmoother(*spec);
+}
+
+// pf-bs keeps every step's particle cloud (particles x rows x (2n + 1)
+// doubles, src/filters/particle_smoother.h): over kMaxRunBytes per run it is
+// refused at the filter's particles key, before any run.
+void ComboBuilder::CheckParticleSmoother(const FilterSpec& spec) const {
+  const auto* pf = std::get_if<ParticleOptions>(&spec.filter);
+  if (!spec.smooth || pf == nullptr) return;
+  double rows = double(sc.steps);
+  for (const FilterData& d : sc.data_runs) rows = std::max(rows, double(d.t.size()));
+  const double bytes =
+      double(pf->num_particles) * rows * (2.0 * double(model.states.size()) + 1.0) * 8.0;
+  if (bytes > kMaxRunBytes)
+    filt.Fail("particles", std::to_string(pf->num_particles) + " particles over " +
+                               FormatNumber(rows) +
+                               " rows: the particle smoother's clouds would "
+                               "take " +
+                               FormatNumber(bytes / 1073741824.0) +
+                               " GiB per run (at "
+                               "most " +
+                               FormatNumber(kMaxRunBytes / 1073741824.0) + " for [" + sc.section +
+                               "]): fewer particles or steps");
 }
 
 // Replaces the placeholders of q = oracle / r = oracle (and their tuned

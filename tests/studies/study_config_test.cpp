@@ -132,6 +132,12 @@ TEST(StudyConfig, ErrorsNameFileLineAndKey) {
       {"steps = 25", "steps = 100000000",
        "s.ini:13: [scenario.pend] steps: 100000000 steps of a 2-state model would hold about "
        "23.8419 GiB per run (at most 4): fewer steps, or a larger dt"},
+      // ... and so is a particle smoother whose clouds would not fit.
+      {"kind = pf\nintegrator = rk4\nparticles = 100",
+       "kind = pf-bs\nintegrator = rk4\nparticles = 10000000",
+       "s.ini:32: [filter.pf] particles: 10000000 particles over 25 rows: the particle "
+       "smoother's clouds would take 9.31323 GiB per run (at most 4 for [scenario.pend]): fewer "
+       "particles or steps"},
       {"keep-runs = 0,2", "keep-runs = 0,4294967296",
        "s.ini:5: [study] keep-runs: must be in [0, 99999999], got 4294967296"},
       {"particles = 100", "particles = 1000000000",
