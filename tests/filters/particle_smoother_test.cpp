@@ -7,6 +7,7 @@
 #include "src/filters/particle_smoother.h"
 
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include <cmath>
 #include <cstdio>

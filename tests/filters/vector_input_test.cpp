@@ -21,6 +21,7 @@
 //   * input widths that do not fit the model are refused with InputError.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -22,6 +22,7 @@
 //   * EM takes partial rows, its NLL never rising; ALS refuses them, naming
 //     the row.
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <array>

@@ -18,6 +18,7 @@
 //     model, and far from that of a KF that ignores the time;
 //   * `simulate` writes y_k = h(t_k, x_k, u_k).
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <array>
