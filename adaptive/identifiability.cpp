@@ -80,6 +80,30 @@ Eigen::VectorXd FisherScale(const std::vector<double>& theta, const std::vector<
   return scale;
 }
 
+// The sentence for flat (or downward) eigen-direction v with eigenvalue
+// `value` of the Fisher matrix, over the parameters `involved` in it.
+std::string FlatSentence(const Eigen::VectorXd& v, double value, bool downwards,
+                         const std::vector<int>& involved, const std::vector<std::string>& names,
+                         const std::vector<std::string>& plain, const std::vector<bool>& is_log,
+                         const std::vector<double>& theta, const Eigen::MatrixXd& cov) {
+  if (downwards)
+    return "the NLL curves downwards along " + DirectionText(v, names) + " (eigenvalue " +
+           FormatNumber(value) +
+           "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
+           "valley); fix one of these parameters or restart from here, no "
+           "standard errors for them";
+  if (involved.size() == 1)
+    return "the data do not determine " + plain[involved[0]] +
+           ": the NLL is flat along it (no standard error)";
+  if (involved.size() == 2 && is_log[involved[0]] && is_log[involved[1]])
+    return TwoLogSentence(v, involved[0], involved[1], theta, plain, cov);
+  std::string list;
+  for (size_t a = 0; a < involved.size(); ++a)
+    list += (a ? (a + 1 == involved.size() ? " and " : ", ") : "") + plain[involved[a]];
+  return list + " are not separately identifiable: the NLL is flat along " +
+         DirectionText(v, names) + " (no standard errors for them)";
+}
+
 FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& theta,
                            const std::vector<std::string>& names, const std::vector<bool>& is_log,
                            const std::vector<double>& start) {
@@ -128,25 +152,8 @@ FisherReport AnalyseFisher(const Eigen::MatrixXd& H, const std::vector<double>& 
     const Eigen::VectorXd v = V.col(j);
     const std::vector<int> involved = SignificantComponents(v);
     for (int i : involved) unidentified[i] = true;
-    if (lambda(j) < -kFlatRatio * top) {
-      r.sentences.push_back(
-          "the NLL curves downwards along " + DirectionText(v, names) + " (eigenvalue " +
-          FormatNumber(lambda(j)) +
-          "): not a minimum (the optimiser stopped on a ridge or in a curved flat "
-          "valley); fix one of these parameters or restart from here, no "
-          "standard errors for them");
-    } else if (involved.size() == 1) {
-      r.sentences.push_back("the data do not determine " + plain[involved[0]] +
-                            ": the NLL is flat along it (no standard error)");
-    } else if (involved.size() == 2 && is_log[involved[0]] && is_log[involved[1]]) {
-      r.sentences.push_back(TwoLogSentence(v, involved[0], involved[1], theta, plain, cov));
-    } else {
-      std::string list;
-      for (size_t a = 0; a < involved.size(); ++a)
-        list += (a ? (a + 1 == involved.size() ? " and " : ", ") : "") + plain[involved[a]];
-      r.sentences.push_back(list + " are not separately identifiable: the NLL is flat along " +
-                            DirectionText(v, names) + " (no standard errors for them)");
-    }
+    r.sentences.push_back(FlatSentence(v, lambda(j), lambda(j) < -kFlatRatio * top, involved, names,
+                                       plain, is_log, theta, cov));
   }
   cov = scale.asDiagonal() * cov * scale.asDiagonal();
   for (int i = 0; i < k; ++i)
