@@ -64,12 +64,7 @@ double ToDouble(const std::string& s) {
 }
 
 // "%.10g": summary values for people and plots (still deterministic).
-std::string Num(double v) {
-  if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+std::string Num(double v) { return FormatResultNumber(v); }
 
 int ColumnIndex(const std::vector<std::string>& cols, const std::string& name) {
   const auto it = std::find(cols.begin(), cols.end(), name);

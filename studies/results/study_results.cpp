@@ -100,13 +100,19 @@ std::string Join(const std::vector<std::string>& v, const std::string& sep) {
   return out;
 }
 
+}  // namespace
+
 // "%.10g": summary values for people and plots (still deterministic).
-std::string Num(double v) {
+std::string FormatResultNumber(double v) {
   if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.10g", v);
   return buf;
 }
+
+namespace {
+
+std::string Num(double v) { return FormatResultNumber(v); }
 
 }  // namespace
 

@@ -73,6 +73,8 @@ RowFile ReadRowFile(const std::string& path, const std::vector<std::string>& col
 void ForEachRow(const std::string& path, const std::vector<std::string>& columns, bool* dropped,
                 const std::function<void(const std::vector<std::string>&)>& visit);
 std::string FormatCsvRow(const std::vector<std::string>& fields);
+// A number as the result files write it: %.10g, "" for NaN, inf / -inf.
+std::string FormatResultNumber(double v);
 // A file's bytes; "" when it cannot be read.
 std::string ReadWholeFile(const std::string& path);
 
