@@ -11,6 +11,7 @@
 
 #include "src/cli/commands.h"
 #include "src/cli/plot_run.h"
+#include "src/filters/filter_options.h"
 #include "src/io/json.h"
 #include "src/io/output_file.h"
 #include "src/options/filter_flags.h"
@@ -423,7 +424,7 @@ void CheckSmootherMemory(const FilterJob& job) {
   refuse_over(double(job.spec.smoother_trajectories) * rows * states * 8.0,
               "--smoother-trajectories " + std::to_string(job.spec.smoother_trajectories),
               "fewer trajectories");
-  refuse_over(double(particles) * rows * (2.0 * states + 1.0) * 8.0,
+  refuse_over(ParticleSmootherBytes(particles, rows, int(states)),
               "the particle smoother's clouds of --particles " + std::to_string(particles),
               "fewer particles");
 }

@@ -92,10 +92,11 @@ class Ekf final : public FilterCommon<Model, Meas> {
     P_ = u.P;
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
-    result.residual =
-        WrapResidual<kM>(z - MeasurementAndJacobian<Model, Meas>(
-                                 this->time(), x_, transition_->input(), params_, nullptr),
-                         Meas::kAngleOutputs);
+    if (this->post_fit_residual())
+      result.residual =
+          WrapResidual<kM>(z - MeasurementAndJacobian<Model, Meas>(
+                                   this->time(), x_, transition_->input(), params_, nullptr),
+                           Meas::kAngleOutputs);
     return result;
   }
 

@@ -128,8 +128,16 @@ class Filter {
   // without particles, or before any Update.
   virtual bool EffectiveSampleSize(double* /*ess*/, int* /*particles*/) const { return false; }
 
+  // Whether Update fills StepResult::residual, the post-fit residual
+  // wrap(z - h(x+)): one more evaluation of h per update, needed only by the
+  // adaptive rules (noise_adapter.h). On by default; the run loop
+  // (filter_run_impl.h) turns it off unless the run adapts Q or R.
+  void SetPostFitResidual(bool on) { post_fit_residual_ = on; }
+  bool post_fit_residual() const { return post_fit_residual_; }
+
  private:
   double time_ = 0.0;
+  bool post_fit_residual_ = true;
 };
 
 // Wraps the angle components (flags[i] true) of a residual to (-pi, pi], for

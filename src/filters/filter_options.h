@@ -21,6 +21,13 @@ struct EkfOptions {
   bool IsValidFor(int /*n*/, std::string* error) const { return IsValid(error); }
 };
 
+// The bytes the particle smoother keeps (particle_smoother.h): every step's
+// cloud, `particles` x `rows` x (2 states + 1) doubles. `estlab smooth` and a
+// study's pf-bs refuse a run that would keep over 4 GiB before it starts.
+inline double ParticleSmootherBytes(double particles, double rows, int states) {
+  return particles * rows * (2.0 * states + 1.0) * 8.0;
+}
+
 struct KfOptions {
   // x*; empty = the prior mean given to Initialize().
   std::vector<double> operating_point;

@@ -38,10 +38,16 @@ inline constexpr double kLog2Pi = 1.83787706640934548356;  // log(2 pi)
 // runs, ceres::Jet when the tuner differentiates the likelihood
 // (adaptive/likelihood.h). The double path is the one the benchmarks measure.
 
-// P <- (P + P^T) / 2.
+// P <- (P + P^T) / 2, in place: entry (i, j) and (j, i) both become
+// 0.5 (P_ij + P_ji) (the same number either way round), the diagonal
+// 0.5 (P_ii + P_ii); the bits of the expression with a temporary, without it.
 template <int N, class T = double>
 void Symmetrize(MatT<T, N, N>* P) {
-  *P = (0.5 * (*P + P->transpose())).eval();
+  MatT<T, N, N>& p = *P;
+  for (int j = 0; j < N; ++j) {
+    p(j, j) = 0.5 * (p(j, j) + p(j, j));
+    for (int i = j + 1; i < N; ++i) p(i, j) = p(j, i) = 0.5 * (p(i, j) + p(j, i));
+  }
 }
 
 // Cholesky factor of a small fixed-size symmetric matrix: *L lower triangular
@@ -67,6 +73,37 @@ bool SmallCholesky(const MatT<T, N, N>& A, MatT<T, N, N>* L) {
     }
   }
   return true;
+}
+
+// The Cholesky factor of Eigen's LLT, *L = llt.matrixL(), true when
+// llt.info() == Success: for double and M <= 2 written out in the order of
+// Eigen's unblocked LLT (l00 = sqrt(a00), l10 = a10 / l00,
+// l11 = sqrt(a11 - l10 l10): the same bits), failing as Eigen does only on a
+// pivot <= 0 (a NaN pivot passes, and the caller's finiteness check reports
+// it). Eigen's LLT of a 2 x 2 also computes an l1 norm and runs its generic
+// block code, about 5x the instructions of the innovation covariance's
+// factorisation (issue 39). Larger sizes and Jets go through Eigen::LLT.
+template <int M, class T = double>
+bool InnovationCholesky(const MatT<T, M, M>& A, MatT<T, M, M>* L) {
+  if constexpr (std::is_same_v<T, double> && M <= 2) {
+    using std::sqrt;
+    MatT<T, M, M>& l = *L;
+    if (A(0, 0) <= 0.0) return false;
+    l(0, 0) = sqrt(A(0, 0));
+    if constexpr (M == 2) {
+      l(0, 1) = 0.0;
+      l(1, 0) = A(1, 0) / l(0, 0);
+      const double d = A(1, 1) - l(1, 0) * l(1, 0);
+      if (d <= 0.0) return false;
+      l(1, 1) = sqrt(d);
+    }
+    return true;
+  } else {
+    const Eigen::LLT<MatT<T, M, M>> llt(A);
+    if (llt.info() != Eigen::Success) return false;
+    *L = llt.matrixL();
+    return true;
+  }
 }
 
 // L^-1 b for lower-triangular L (forward substitution).
@@ -123,9 +160,7 @@ bool KalmanGain(const MatT<T, M, N>& H, const MatT<T, N, N>& P, const MatT<T, M,
   S->noalias() = HP * H.transpose();
   *S += R;
   Symmetrize<M, T>(S);
-  const Eigen::LLT<MatT<T, M, M>> llt(*S);
-  if (llt.info() != Eigen::Success) return false;
-  *L = llt.matrixL();
+  if (!InnovationCholesky<M, T>(*S, L)) return false;
   *K = CholeskySolve<M, N, T>(*L, HP).transpose();
   return AllFiniteT(*K);
 }
@@ -385,6 +420,13 @@ class FilterCommon : public Filter<Model, Meas> {
     P_ = P_pred;
     cross_ = C;
     have_cross_ = true;
+  }
+  // ... whose cross-covariance the filter forms itself, on demand (an
+  // override of PredictCrossCov).
+  void SetPredicted(const State& x_pred, const StateCov& P_pred) {
+    x_ = x_pred;
+    P_ = P_pred;
+    have_cross_ = false;
   }
 
   State x_ = State::Zero();

@@ -148,10 +148,11 @@ class LinearizedKf final : public FilterCommon<Model, Meas> {
     P_ = u.P;
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x*, u*) - H wrap(x+ - x*) - D (u - u*))
-    result.residual = WrapResidual<kM>(
-        z - lin_.h_star - lin_.H * WrapResidual<kN>(x_ - lin_.x_star, Model::kAngleStates) -
-            lin_.D * (InputColumn<Model>(input_) - lin_.u_star),
-        Meas::kAngleOutputs);
+    if (this->post_fit_residual())
+      result.residual = WrapResidual<kM>(
+          z - lin_.h_star - lin_.H * WrapResidual<kN>(x_ - lin_.x_star, Model::kAngleStates) -
+              lin_.D * (InputColumn<Model>(input_) - lin_.u_star),
+          Meas::kAngleOutputs);
     return result;
   }
 

@@ -233,9 +233,10 @@ class ParticleFilter final : public FilterCommon<Model, Meas> {
     ComputeMoments();
     if (!BeliefFinite(x_, P_))
       return FailResult(FilterStatus::kNonFinite, "particle mean or covariance is not finite");
-    result.residual = WrapResidual<kM>(
-        z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
-        Meas::kAngleOutputs);
+    if (this->post_fit_residual())
+      result.residual = WrapResidual<kM>(
+          z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
+          Meas::kAngleOutputs);
     resampled_ = ess_ < options_.ess_threshold * double(n);
     if (resampled_) ResampleParticles();
     return result;

@@ -102,10 +102,10 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     SigmaPredictMoments<kN>(set_, propagated_, Q, &x_pred, &P_pred);
     if (!BeliefFinite<kN>(x_pred, P_pred))
       return Fail(FilterStatus::kNonFinite, "predicted mean or covariance is not finite");
-    // C = sum_i Wc_i (X_i - x)(X-_i - x-)^T
-    this->SetPredicted(
-        x_pred, P_pred,
-        WeightedCrossCov<kN, kN>(points_, x_, propagated_, x_pred, set_.cov_weights));
+    // The cross-covariance with the prior is formed only when asked for
+    // (PredictCrossCov, the smoothers): the points it needs are kept.
+    prior_mean_ = x_;
+    this->SetPredicted(x_pred, P_pred);
     have_propagated_ = true;
     return FilterStatus::kOk;
   }
@@ -132,10 +132,20 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
     P_ = u.P;
     result.gain = u.K;
     // post-fit residual eps = wrap(z - h(x+))
-    result.residual = WrapResidual<kM>(
-        z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
-        Meas::kAngleOutputs);
+    if (this->post_fit_residual())
+      result.residual = WrapResidual<kM>(
+          z - EvalMeasurement<Model, Meas, double>(this->time(), x_, transition_->input(), params_),
+          Meas::kAngleOutputs);
     return result;
+  }
+
+  // C = sum_i Wc_i (X_i - x)(X-_i - x-)^T of the last Predict, from its
+  // points; false after an Update (which may redraw them) or before any
+  // Predict.
+  bool PredictCrossCov(StateCov* C) const override {
+    if (!have_propagated_) return false;
+    *C = WeightedCrossCov<kN, kN>(points_, prior_mean_, propagated_, x_, set_.cov_weights);
+    return true;
   }
 
   // Number of points of the rule, and the points of the last Predict/Update.
@@ -166,7 +176,8 @@ class SigmaPointFilter final : public FilterCommon<Model, Meas> {
   StatePoints points_;      // X_i (or Y_i after a redraw)
   StatePoints propagated_;  // X-_i = Phi(X_i)
   MeasurementPoints measurement_points_;
-  bool have_propagated_ = false;
+  State prior_mean_ = State::Zero();  // x of the last Predict's start
+  bool have_propagated_ = false;      // points_ and propagated_ are the last Predict's
 };
 
 // The filter that FilterSpec::filter = SigmaPointOptions runs (MakeFilter,

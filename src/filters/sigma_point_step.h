@@ -101,12 +101,10 @@ FilterStatus SigmaUpdate(const SigmaPointSet& set, const PointsT<T, Model::kStat
   // (missing.h)
   const MissingMask<M> missing(z);
   if (missing.Any()) missing.MaskCov(&out->S), missing.MaskCols(&C);
-  const Eigen::LLT<MatT<T, M, M>> llt(out->S);
-  if (llt.info() != Eigen::Success) {
+  if (!InnovationCholesky<M, T>(out->S, &out->L)) {
     *why = "Cholesky of the innovation covariance S failed";
     return FilterStatus::kFactorizationFailed;
   }
-  out->L = llt.matrixL();
   // K = C S^-1, i.e. K^T = S^-1 C^T;  nu = wrap(z - z^)
   out->K = CholeskySolve<M, N, T>(out->L, C.transpose()).transpose();
   out->nu = WrapResidual<M, T>(z.template cast<T>() - z_pred, Meas::kAngleOutputs);

@@ -46,6 +46,9 @@ class FixedStepTransition final : public Transition<Model> {
         x, F);
   }
   using typename Base::Points;
+  // Sigma points one scalar call each: packets of 2 gave the same bits but
+  // more instructions for a UKF's 5 or 9 points (the padded lane of the
+  // last packet, gather and scatter; issue 39, docs/performance.md).
   void StepPoints(const Points& points, double t0, double t1, Points* out) override {
     const Eigen::Index count = points.cols();
     CountPoints(count);

@@ -311,6 +311,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
 
   std::optional<NoiseAdapter<N, M>> adapter;
   if (!spec.adapt.rule.empty()) adapter.emplace(spec.adapt);
+  filter->SetPostFitResidual(adapter.has_value());  // the adapter's input only
   StateCov Q = spec.q_white_accel ? StateCov::Zero() : MatFromVector<N, N>(spec.q);
   bool q_adapted = false;
   Mat<M, M> R = MatFromVector<M, M>(spec.r);
@@ -360,7 +361,8 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
     return true;
   };
   auto row = [&](size_t k, const Vec<double, M>* z, const double* u) {
-    const StateCov p_pred = filter->cov();
+    StateCov p_pred = StateCov::Zero();
+    if (adapter) p_pred = filter->cov();  // the adapter's
     filter->SetInput(InputFrom<Model>(u));  // u_k: seen by h(t, x, u), held over the next step
     filter->SetTime(data.t[k]);
     RowRecord<N, M> rec;

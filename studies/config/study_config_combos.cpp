@@ -7,6 +7,7 @@
 
 #include "adaptive/tuner.h"
 #include "src/core/parse.h"
+#include "src/filters/filter_options.h"
 #include "src/io/output_file.h"
 #include "src/options/estimate_flags.h"
 #include "src/options/filter_settings.h"
@@ -283,8 +284,7 @@ void ComboBuilder::CheckParticleSmoother(const FilterSpec& spec) const {
   if (!spec.smooth || pf == nullptr) return;
   double rows = double(sc.steps);
   for (const FilterData& d : sc.data_runs) rows = std::max(rows, double(d.t.size()));
-  const double bytes =
-      double(pf->num_particles) * rows * (2.0 * double(model.states.size()) + 1.0) * 8.0;
+  const double bytes = ParticleSmootherBytes(pf->num_particles, rows, int(model.states.size()));
   if (bytes > kMaxRunBytes)
     filt.Fail("particles", std::to_string(pf->num_particles) + " particles over " +
                                FormatNumber(rows) +

@@ -2,14 +2,18 @@
 // matrix_exponential.h): bit for bit what Eigen's fixed-size solver and
 // exp give when instantiated in place (the test instantiates them itself,
 // as the filters did before), and, beyond the fixed sizes, the defining
-// identities A V = V diag(values) and exp(A) exp(-A) = I.
+// identities A V = V diag(values) and exp(A) exp(-A) = I. The innovation
+// covariance's written-out Cholesky (filter_util.h) against Eigen's LLT.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "src/filters/filter_util.h"
 #include "src/filters/matrix_exponential.h"
 #include "src/filters/symmetric_eigen.h"
 
@@ -76,6 +80,58 @@ TEST(DenseKernels, FixedSizesGiveTheInPlaceBits) {
   CheckExpBits<4>(&rng);  // the KF of a 2-state, 1-input model with a ramp: 2 + 2 + 1
   CheckExpBits<7>(&rng);
   CheckExpBits<24>(&rng);
+}
+
+// InnovationCholesky against Eigen's LLT in place: the same success, and on
+// success the same bits of L, for positive definite, indefinite, singular,
+// nearly singular and NaN matrices.
+template <int M>
+void CheckCholeskyBits(std::mt19937* rng) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  int failures = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Mat<M, M> A = Symmetric<M>(rng, trial % 4);
+    if (trial % 50 == 7) A(M - 1, 0) = A(0, M - 1) = nan;
+    if (trial % 50 == 9) A(M - 1, M - 1) = nan;
+    if (trial % 50 == 11) A.setZero();
+    const Eigen::LLT<Mat<M, M>> llt(A);
+    Mat<M, M> L = Mat<M, M>::Constant(5.0);
+    const bool ok = InnovationCholesky<M>(A, &L);
+    ASSERT_EQ(ok, llt.info() == Eigen::Success) << "M = " << M << ", trial " << trial;
+    failures += !ok;
+    if (!ok) continue;
+    const Mat<M, M> expected = llt.matrixL();
+    ASSERT_TRUE(SameBits<M>(L, expected)) << "M = " << M << ", trial " << trial << "\n" << A;
+  }
+  EXPECT_GT(failures, 100);  // the indefinite and zero matrices were refused
+}
+
+TEST(DenseKernels, InnovationCholeskyGivesEigensLltBits) {
+  std::mt19937 rng(39);
+  CheckCholeskyBits<1>(&rng);
+  CheckCholeskyBits<2>(&rng);
+  CheckCholeskyBits<3>(&rng);  // Eigen's own, through the same function
+}
+
+// Symmetrize in place gives the bits of (P + P^T) / 2 through a temporary.
+template <int N>
+void CheckSymmetrizeBits(std::mt19937* rng) {
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 500; ++trial) {
+    Mat<N, N> P;
+    for (int i = 0; i < N * N; ++i) P.data()[i] = std::ldexp(normal(*rng), trial % 40 - 20);
+    const Mat<N, N> expected = (0.5 * (P + P.transpose())).eval();
+    Symmetrize<N>(&P);
+    ASSERT_TRUE(SameBits<N>(P, expected)) << "N = " << N << ", trial " << trial;
+  }
+}
+
+TEST(DenseKernels, SymmetrizeInPlaceGivesTheTemporarysBits) {
+  std::mt19937 rng(40);
+  CheckSymmetrizeBits<1>(&rng);
+  CheckSymmetrizeBits<2>(&rng);
+  CheckSymmetrizeBits<4>(&rng);
+  CheckSymmetrizeBits<7>(&rng);
 }
 
 TEST(DenseKernels, LargerSizesSatisfyTheDefiningIdentities) {

@@ -191,6 +191,52 @@ TEST(SigmaPointFilterTest, AngleMeansAndInnovationsAreCircular) {
   EXPECT_NEAR(ukf.cov()(0, 0), 0.25, 0.01);
 }
 
+// The extras a run asks for only when it needs them (issue 39): the
+// cross-covariance with the prior, formed on demand after a Predict, equals
+// sum_i Wc_i (X_i - x)(Phi(X_i) - x-)^T written out here, and is refused
+// after the Update; the post-fit residual z - h(x+) is computed only when
+// asked for, and leaves every other number of the step as it was.
+TEST(SigmaPointFilterTest, CrossCovarianceAndResidualOnlyWhenAskedFor) {
+  using P = models::Pendulum;
+  const P::Params params;
+  const double dt = 0.05;
+  auto transition = EulerTransition<P>(params);
+  SigmaPointOptions o;
+  o.alpha = 0.5;
+  SigmaPointFilter<P, P::Sin> a(transition.get(), params, o), b(transition.get(), params, o);
+  b.SetPostFitResidual(false);
+  const Vec<double, 2> x0(0.4, -0.3);
+  Mat<2, 2> P0;
+  P0 << 0.04, 0.01, 0.01, 0.09;
+  const Mat<2, 2> Q = 1e-3 * Mat<2, 2>::Identity();
+  a.Initialize(x0, P0);
+  b.Initialize(x0, P0);
+  Mat<2, 2> C;
+  EXPECT_FALSE(a.PredictCrossCov(&C));  // before any Predict
+  ASSERT_EQ(a.Predict(0.0, dt, Q), FilterStatus::kOk);
+  ASSERT_EQ(b.Predict(0.0, dt, Q), FilterStatus::kOk);
+  ASSERT_TRUE(a.PredictCrossCov(&C));
+  // by hand: the rule's points from x0, P0 (+ jitter), one Euler step each
+  const Eigen::LLT<Mat<2, 2>> llt(P0 + o.jitter * Mat<2, 2>::Identity());
+  const Mat<2, 2> L = llt.matrixL();
+  Mat<2, 2> expected = Mat<2, 2>::Zero();
+  for (Eigen::Index i = 0; i < a.num_points(); ++i) {
+    const Vec<double, 2> X = x0 + L * a.unit_points().col(i);
+    const Vec<double, 2> Xp = X + dt * P::Rhs<double>(0.0, X, 0.0, params);
+    expected += a.cov_weights()(i) * (X - x0) * (Xp - a.mean()).transpose();
+  }
+  EXPECT_LT((C - expected).cwiseAbs().maxCoeff(), 1e-14);
+  const Vec<double, 1> z(0.35);
+  const Mat<1, 1> R = Mat<1, 1>::Constant(0.01);
+  const StepResult<1> ra = a.Update(z, R), rb = b.Update(z, R);
+  EXPECT_FALSE(a.PredictCrossCov(&C));  // the Update may have redrawn the points
+  EXPECT_EQ(ra.residual(0), z(0) - std::sin(a.mean()(0)));
+  EXPECT_EQ(rb.residual(0), 0.0);
+  EXPECT_EQ(ra.log_likelihood, rb.log_likelihood);
+  EXPECT_EQ(ra.innovation(0), rb.innovation(0));
+  EXPECT_TRUE(a.mean() == b.mean() && a.cov() == b.cov());
+}
+
 TEST(SigmaPointFilterTest, FailuresAreStatuses) {
   const Osc::Params params;
   auto transition = EulerTransition<Osc>(params);
