@@ -51,7 +51,10 @@
 // tuner's tolerances.
 //
 // WARNING: a Cvodes transition is not thread-safe, so neither is an
-// InnovationLikelihood with integrator cvodes: one per thread. A failed Cholesky,
+// InnovationLikelihood with integrator cvodes: one per thread. With a
+// fixed-step or discrete process model Run() writes nothing of the object, so
+// several threads may run one likelihood at once (the tuner's gradient
+// passes, adaptive/tuner_objective.h). A failed Cholesky,
 // a non-finite value or trace(P) above spec.max_cov_trace makes Run() return
 // false (the tuner treats that trial point as infeasible).
 #ifndef ESTLAB_ADAPTIVE_LIKELIHOOD_H_
@@ -457,7 +460,7 @@ bool InnovationLikelihood<Model, Meas>::RunWith(const T* theta, const P& p, cons
   const MeasCovT<T> R = r_.template Matrix<T>(theta_r, 0.0);
   StateCovT<T> Q = q_.template Matrix<T>(theta_q, dt_ref_);
   double q_dt = dt_ref_;
-  integrator_steps_ = integrated_intervals_ = 0;
+  if (UsesCvodes()) integrator_steps_ = integrated_intervals_ = 0;  // fixed-step: no writes
   Belief<T> b;
   if (sigma_) {
     const Eigen::Index count = sigma_set_.unit_points.cols();

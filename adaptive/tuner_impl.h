@@ -63,7 +63,8 @@ TuneResult TuneWith(const FilterSpec& spec, const TunerOptions& options,
   using namespace tuner_internal;
   const auto clock_start = std::chrono::steady_clock::now();
   const InnovationLikelihood<Model, Meas> lik(spec, options, datasets);
-  const Objective<Model, Meas> objective(lik);
+  // the threads that the starts leave free run each gradient's passes
+  const Objective<Model, Meas> objective(lik, std::max(1, options.jobs / std::max(1, options.starts)));
   const int k = lik.NumParams();
 
   TuneResult result;

@@ -305,7 +305,7 @@ void Transitions_(benchmark::State& state, int count, bool jacobian, Integrator 
 // is one full tune (one start); with `std_errors` false the Hessian of the
 // standard errors is skipped, leaving the time to converge (the common-scale
 // pre-search and L-BFGS).
-void Tuner_(benchmark::State& state, double guess, bool std_errors) {
+void Tuner_(benchmark::State& state, double guess, bool std_errors, int jobs) {
   const ModelEntry& model = FindModel("double-pendulum");
   SimulationSpec sim;
   sim.params = model.ResolveParams({});
@@ -351,6 +351,7 @@ void Tuner_(benchmark::State& state, double guess, bool std_errors) {
   options.q_param = NoiseParam::kDiag;
   options.r_param = NoiseParam::kDiag;
   options.compute_std_errors = std_errors;
+  options.jobs = jobs;  // one start: the gradient's three passes in parallel
   int iterations = 0;
   for (auto _ : state) {
     const TuneResult r = model.tune(spec, options, data);
@@ -549,17 +550,21 @@ void RegisterAll() {
       ->Unit(us);
   // Tuner: 8 parameters (diagonal Q and R), 2000 steps, UKF with RK4.
   const auto ms = benchmark::kMillisecond;
+  // jobs2: one start on two threads (adaptive/tuner_objective.h: the double
+  // run and the two chunks of Jets of each gradient in parallel).
   for (bool std_errors : {true, false})
     for (double guess : {100.0, 0.01})
-      RegisterBenchmark(
-          (std::string("Tuner/double-pendulum/ukf-rk4/diag-q-r-8-params/2000-steps/guess-x") +
-           (guess > 1 ? "100" : "0.01") + (std_errors ? "/with-std-errors" : "/converge"))
-              .c_str(),
-          Tuner_, guess, std_errors)
-          ->Unit(ms)
-          ->Iterations(1)
-          ->MeasureProcessCPUTime()  // worker threads
-          ->UseRealTime();
+      for (int jobs : {1, 2})
+        RegisterBenchmark(
+            (std::string("Tuner/double-pendulum/ukf-rk4/diag-q-r-8-params/2000-steps/guess-x") +
+             (guess > 1 ? "100" : "0.01") + (std_errors ? "/with-std-errors" : "/converge") +
+             (jobs > 1 ? "/jobs2" : ""))
+                .c_str(),
+            Tuner_, guess, std_errors, jobs)
+            ->Unit(ms)
+            ->Iterations(1)
+            ->MeasureProcessCPUTime()  // worker threads
+            ->UseRealTime();
   // Studies end to end; wall time is the figure (threads).
   for (const char* study : {"paper000_noise_grid", "paper002_pendulum_mc"})
     for (int jobs : {1, 2})

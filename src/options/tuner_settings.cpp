@@ -30,8 +30,10 @@ const std::vector<TunerKey> kTunerKeys = {
      Noise, "the estimators of Q and R"},
     {"starts", "1", "number of starts (1 = the initial guess only)", MultiStart,
      "the ml estimator"},
-    {"jobs", "1", "threads running the starts (same result for any value)", MultiStart,
-     "the ml estimator", /*in_studies=*/false},
+    {"jobs", "1",
+     "threads running the starts, and with fewer starts each gradient's passes (same result "
+     "for any value)",
+     MultiStart, "the ml estimator", /*in_studies=*/false},
     {"start-spread", "2", "Latin hypercube half-width in log space", MultiStart,
      "the ml estimator"},
     {"burn-in", "0", "updates skipped at the start of each dataset", BurnIn,

@@ -779,7 +779,8 @@ StudyRunSummary RunStudy(const StudyConfig& config, const StudyRunOptions& optio
   StudyConfig tuned_config = config;
   std::optional<StudyTunings> tunings;
   if (!tasks.empty() || !fs::exists(dir + "/tuned.csv")) {
-    tunings.emplace(tuned_config, StudyTuningOptions{.dir = dir, .progress = options.progress});
+    tunings.emplace(tuned_config,
+                    StudyTuningOptions{.dir = dir, .progress = options.progress, .jobs = jobs});
     tunings->ApplyReused(&tuned_config);
   }
   RunContext ctx;

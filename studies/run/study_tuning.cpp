@@ -241,7 +241,8 @@ class TuningProgress {
 
 // Tunes one combo: its trajectories (or the scenario's tuning files), then
 // the tuner.
-TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, TuningProgress* progress) {
+TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, int jobs,
+                   TuningProgress* progress) {
   const ScenarioConfig& sc = config.scenarios[key.s];
   const Combo& cb = sc.combos[key.c];
   std::vector<FilterData> datasets;
@@ -265,6 +266,7 @@ TunedCombo TuneOne(const StudyConfig& config, const ComboKey& key, TuningProgres
   TuneResult r;
   if (failure.empty()) {
     TunerOptions options = cb.tuner;
+    options.jobs = jobs;  // the gradient's passes (the result does not depend on it)
     const std::string label = key.Label();
     options.progress = [progress, label](const TuneProgress& p) { progress->Iteration(label, p); };
     try {
@@ -348,7 +350,7 @@ void StudyTunings::Tune(size_t i, StudyConfig* config) {
   const size_t j = st.pending[i];
   const ComboKey& key = st.keys[j];
   const auto t0 = std::chrono::steady_clock::now();
-  TunedCombo t = TuneOne(*config, key, st.progress.get());
+  TunedCombo t = TuneOne(*config, key, options_.jobs, st.progress.get());
   if (!options_.dir.empty()) SaveTuned(options_.dir, hash_, key, t);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   st.progress->Finished(key.Label(), wall, t.failure.empty() ? "tuned" : "failed");

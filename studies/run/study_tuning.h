@@ -30,6 +30,10 @@ struct StudyTuningOptions {
   // Progress on stderr: one line per finished tuning, or a line rewritten
   // in place (with the running tuner's iteration) on a terminal.
   bool progress = false;
+  // Threads of a tuning's gradient passes (TunerOptions::jobs; the study's
+  // jobs): a tuning on the critical path spreads over the cores the runs
+  // leave. The numbers do not depend on it (adaptive/tuner_objective.h).
+  int jobs = 1;
 };
 
 struct StudyTuningSummary {

@@ -483,6 +483,31 @@ TEST(TunerVerdict, JobsDoNotChangeTheResult) {
   EXPECT_EQ(one.best_start, two.best_start);
 }
 
+// One start on two threads: the gradient's passes (the double run and two
+// chunks of Jets over six parameters) run in parallel and give the same
+// numbers as in turn, for both solvers.
+TEST(TunerVerdict, GradientPassesInParallelDoNotChangeTheResult) {
+  const std::vector<FilterData> data = {WellsData(11, 150, 1.2, 0.5)};
+  for (MlSolver solver : {MlSolver::kLbfgs, MlSolver::kLeastSquares}) {
+    TunerOptions o = WellsOptions(-3.0, 3.0);
+    o.q_param = NoiseParam::kDiag;
+    o.r_param = NoiseParam::kDiag;
+    o.solver = solver;
+    o.jobs = 1;
+    const FilterSpec spec = WellsSpec(0.8, 0.1, 0.2);
+    const TuneResult one = TuneWith<Wells, Wells::Both>(spec, o, data);
+    o.jobs = 3;
+    const TuneResult three = TuneWith<Wells, Wells::Both>(spec, o, data);
+    ASSERT_EQ(one.theta.size(), 6u);
+    EXPECT_GT(one.iterations, 2) << one.message;
+    EXPECT_EQ(one.theta, three.theta) << MlSolverName(solver);
+    EXPECT_EQ(one.trace, three.trace) << MlSolverName(solver);
+    EXPECT_EQ(one.nll_tuned, three.nll_tuned) << MlSolverName(solver);
+    EXPECT_EQ(one.std_errors, three.std_errors) << MlSolverName(solver);
+    EXPECT_EQ(one.status, three.status) << three.message;
+  }
+}
+
 TEST(TunerVerdict, StartOneBeginsAtTheInitialNll) {
   const std::vector<FilterData> data = {WellsData(9, 100, 1.2, 0.5)};
   TunerOptions o = WellsOptions(-3.0, 3.0);
