@@ -434,7 +434,8 @@ FilterJob PrepareFilter(const FilterRequest& r) {
   if (r.model.empty()) throw InputError("--model is required (see 'estlab list')");
   if (r.data.empty()) throw InputError("--data is required");
   FilterJob job;
-  job.model = &FindModel(r.model);
+  // A model file not yet in the cache compiles only what this run needs.
+  job.model = &FindModel(r.model, {.run = RunNeedsOf(r.settings, r.smooth)});
   const ModelEntry& model = *job.model;
   job.spec = BuildFilterSpec(r.settings, model);
   if (r.smooth) CheckSmootherOptions(r, model, &job.spec);

@@ -127,7 +127,9 @@ int RunList(const std::vector<std::string>& args) {
     return 0;
   }
   if (vm.count("model")) {
-    const ModelEntry& m = FindModel(vm["model"].as<std::string>());
+    // The description alone: a model file not yet in the cache compiles no
+    // filter and no simulator for it (run-all-none.so).
+    const ModelEntry& m = FindModel(vm["model"].as<std::string>(), {.run = RunNeeds{.filter = -2}});
     ShowModel(m, vm.count("json") > 0);
     return 0;
   }

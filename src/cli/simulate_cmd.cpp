@@ -339,7 +339,9 @@ void SetNoiseAndSensors(const po::variables_map& vm, const ModelEntry& model, Si
 SimulationJob PrepareSimulation(const po::variables_map& vm) {
   if (vm.count("column") && !vm.count("data")) throw InputError("--column needs --data");
   SimulationJob job;
-  job.model = &FindModel(vm["model"].as<std::string>());
+  // A model file not yet in the cache compiles only its simulator.
+  job.model =
+      &FindModel(vm["model"].as<std::string>(), {.run = RunNeeds{.filter = -2, .simulate = true}});
   const ModelEntry& model = *job.model;
   SimulationSpec& spec = job.spec;
   std::vector<std::pair<std::string, double>> x0;

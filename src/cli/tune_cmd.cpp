@@ -813,7 +813,11 @@ int RunTune(const std::vector<std::string>& args) {
   options.x0_per_file = vm.count("x0-per-file") > 0;
   std::string error;  // before a model file compiles: a wrong estimator for x0 says so at once
   if (!options.IsValid(&error)) throw InputError(error);
-  const ModelEntry& model = FindModel(vm["model"].as<std::string>(), {.tuner = !output_error});
+  // A model file not yet in the cache compiles the tuner and, for the tuned
+  // run's rows, only the filter it tunes (output error: the whole entry).
+  ModelNeeds needs{.tuner = !output_error};
+  if (!output_error) needs.run = RunNeedsOf(SettingsFromVariablesMap(vm, "init-"), false);
+  const ModelEntry& model = FindModel(vm["model"].as<std::string>(), needs);
   if (model.tune == nullptr && !output_error)
     throw InputError("model '" + model.name + "' has no tuner");
   if (!vm.count("measure")) throw InputError("--measure is required (see 'estlab list')");

@@ -76,6 +76,19 @@ const FilterKey* FindFilterKey(const std::string& key, const std::string& noise_
   return nullptr;
 }
 
+RunNeeds RunNeedsOf(const FilterSettings& settings, bool smooth) {
+  RunNeeds needs;
+  if (settings.Given("measure")) needs.measurement = settings.Get("measure");
+  try {
+    needs.filter = int(DefaultFilterOptions(ParseFilterKind(settings.Get("filter"))).index());
+  } catch (const InputError&) {
+    needs.filter = -1;
+  }
+  needs.adapt = settings.Given("adapt");
+  needs.smooth = smooth;
+  return needs;
+}
+
 std::string FilterSettings::Get(const std::string& key) const {
   const auto it = values_.find(key);
   if (it != values_.end() && !it->second.empty()) return it->second.back();

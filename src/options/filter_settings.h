@@ -86,6 +86,11 @@ class FilterSettings {
 // Parses and checks the settings (the filter's own IsValid: filter_options.h
 // of src/run); throws KeyError naming the key.
 FilterSpec BuildFilterSpec(const FilterSettings& settings, const ModelEntry& model);
+// What one run of these settings needs of a model file's code (RunNeeds,
+// registry.h): its measurement, its filter class, the noise adapter when
+// --adapt is given, the smoother for `smooth`. A value that does not parse
+// asks for every class (BuildFilterSpec then names it).
+RunNeeds RunNeedsOf(const FilterSettings& settings, bool smooth);
 // The "seed" key: a non-negative 64-bit integer (the particle filter's and
 // the tuner's random draws); throws KeyError.
 uint64_t SeedOf(const FilterSettings& settings);

@@ -16,7 +16,10 @@ namespace estlab {
 
 // kWithTuner = false leaves `tune` null: a model library compiled at run
 // time (model_plugin.cpp) compiles its tuner separately, on first use.
-template <DynamicModel Model, bool kWithTuner = true>
+// Parts (src/run/run_parts.h): the filter runner's parts compiled, and
+// whether the simulator is (else `simulate` is null; the description is
+// always whole).
+template <DynamicModel Model, bool kWithTuner = true, class Parts = AllRunParts>
 requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   ModelEntry e;
   e.name = Model::kName;
@@ -49,9 +52,9 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   e.stiff = Model::kStiff;
   e.discrete_time = kDiscreteTime<Model>;
   for (const auto& pair : Model::kPositionRatePairs) e.position_rate_pairs.push_back(pair);
-  e.simulate = &Simulate<Model>;
+  if constexpr (Parts::kSimulate) e.simulate = &Simulate<Model>;
   if constexpr (kWithTuner) e.tune = &TuneModel<Model>;  // generated tune/tune_<model>.cpp
-  e.run_filter = &RunFilter<Model>;
+  if constexpr (Parts::kFilter != -2) e.run_filter = &RunFilter<Model, Parts>;
   return e;
 }
 
@@ -72,6 +75,14 @@ requires kAllMeasurementsOf<Model> ModelEntry MakeModelEntry() {
   extern "C" const estlab::ModelEntry* estlab_model_entry_v1() {                    \
     static const estlab::ModelEntry entry = estlab::MakeModelEntry<Model, false>(); \
     return &entry;                                                                  \
+  }
+
+// The entry point of a model library compiled at run time for one command
+// (model_plugin.cpp): only the parts of the runner it needs.
+#define ESTLAB_DEFINE_MODEL_PARTS_PLUGIN(Model, Parts)                                     \
+  extern "C" const estlab::ModelEntry* estlab_model_entry_v1() {                           \
+    static const estlab::ModelEntry entry = estlab::MakeModelEntry<Model, false, Parts>(); \
+    return &entry;                                                                         \
   }
 
 #endif  // ESTLAB_REGISTRY_MODEL_ENTRY_IMPL_H_

@@ -182,8 +182,26 @@ void EnsureSnapshot(const fs::path& dir, const std::string& text) {
   const fs::path header = dir / "model.h";
   std::error_code ec;
   if (fs::exists(header, ec) && ReadModelText(header.string()) == text) return;
-  for (const char* library : {"entry.so", "tune.so"}) fs::remove(dir / library, ec);
+  for (const auto& e : fs::directory_iterator(dir, ec))  // entry.so, tune.so, run-*.so
+    if (e.path().extension() == ".so") fs::remove(e.path(), ec);
   WriteAtomically(header, text);
+}
+
+// Whether `dir` holds a compiled library (entry.so, tune.so, run-*.so).
+bool HoldsLibrary(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() == ".so" && name.find(".tmp") == std::string::npos) return true;
+  }
+  return false;
+}
+
+// What a library holds, for the compile message.
+std::string WhatItHolds(const std::string& which) {
+  if (which == "entry") return "filters and simulator";
+  if (which == "tune") return "tuner";
+  return "what this command runs, " + which;
 }
 
 // Whether `path` was last written more than an hour ago: older than any
@@ -257,7 +275,7 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
                  log = dir / (which + tag + ".log");
   WriteAtomically(cpp, unit);
   std::fprintf(stderr, "estlab: compiling model %s, %s (first use; cached in %s)\n", s.name.c_str(),
-               which == "entry" ? "filters and simulator" : "tuner", dir.c_str());
+               WhatItHolds(which).c_str(), dir.c_str());
   const auto start = std::chrono::steady_clock::now();
   std::string libs;  // each a path (may hold spaces) or empty
   for (const char* lib : {ESTLAB_PLUGIN_LIBS, which == "tune" ? ESTLAB_PLUGIN_TUNER_LIBS : ""})
@@ -291,7 +309,7 @@ double CompileLibrary(const ModelSource& s, const fs::path& dir, const std::stri
     // Nothing of a failed compile stays: the snapshot (written again on the
     // next use) and the folder once empty; not while another compile of
     // this key (its NAME.PID.tmp.cpp) still reads the snapshot.
-    if (!fs::exists(dir / "entry.so", ec) && !OtherCompileRunning(dir)) {
+    if (!HoldsLibrary(dir) && !OtherCompileRunning(dir)) {
       fs::remove(dir / "model.h", ec);
       fs::remove(dir, ec);  // only when empty
     }
@@ -333,6 +351,13 @@ void* Symbol(void* handle, const char* name, const fs::path& library) {
   void* symbol = ::dlsym(handle, name);
   if (symbol == nullptr) throw InputError("model library " + library.string() + " has no " + name);
   return symbol;
+}
+
+// The entry a compiled library (entry.so or run-*.so) describes.
+std::unique_ptr<ModelEntry> LoadEntry(const fs::path& library) {
+  using EntryFn = const ModelEntry* (*)();
+  auto fn = reinterpret_cast<EntryFn>(Symbol(Open(library), "estlab_model_entry_v1", library));
+  return std::make_unique<ModelEntry>(*fn());
 }
 
 }  // namespace
@@ -395,19 +420,22 @@ const ModelEntry& LoadModelFile(const std::string& path, ModelNeeds needs) {
   const fs::path header = "model.h";
   ModelBuildReport& report = Report();
   report = {};
-  std::unique_ptr<ModelEntry>& entry = loaded[dir.string()];
+  // The whole entry, or one command's parts (src/run/run_parts.h) while the
+  // whole entry is neither loaded nor in the cache: a third of its compile.
+  const bool parts =
+      needs.run.has_value() && loaded.count(dir.string()) == 0 && !fs::exists(dir / "entry.so");
+  const std::string which = parts ? PartsLibraryName(*needs.run) : "entry";
+  const fs::path library = dir / (which + ".so");
+  std::unique_ptr<ModelEntry>& entry = loaded[parts ? library.string() : dir.string()];
   if (entry == nullptr) {
-    report.entry_seconds = CompileLibrary(
-        s, dir, "entry", ModelEntryUnit(s, header.string(), ModelLinkage::kPlugin, false),
-        s.contents);
+    const std::string unit = parts
+                                 ? ModelPartsUnit(s, header.string(), *needs.run)
+                                 : ModelEntryUnit(s, header.string(), ModelLinkage::kPlugin, false);
+    report.entry_seconds = CompileLibrary(s, dir, which, unit, s.contents);
     report.compiled_entry = report.entry_seconds > 0.0;
-    report.entry_library = (dir / "entry.so").string();
-    void* handle = Open(dir / "entry.so");
-    using EntryFn = const ModelEntry* (*)();
-    auto fn = reinterpret_cast<EntryFn>(Symbol(handle, "estlab_model_entry_v1", dir / "entry.so"));
-    entry = std::make_unique<ModelEntry>(*fn());
+    entry = LoadEntry(library);
   }
-  report.entry_library = (dir / "entry.so").string();
+  report.entry_library = library.string();
   if (needs.tuner && entry->tune == nullptr) {
     report.tuner_seconds = CompileLibrary(
         s, dir, "tune", ModelTunerUnit(s, header.string(), ModelLinkage::kPlugin), s.contents);

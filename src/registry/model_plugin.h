@@ -4,7 +4,12 @@
 // that is a path or is found on ESTLAB_MODEL_PATH.
 //
 //   compile   <cache>/<name>-<key>/entry.so   metadata, transitions, simulator,
-//                                             every filter (first simulate/filter)
+//                                             every filter (`model build`, a
+//                                             study, `list`, Python)
+//             <cache>/<name>-<key>/run-*.so   metadata and one command's parts
+//                                             (src/run/run_parts.h): the first
+//                                             `filter`, `smooth`, `simulate`,
+//                                             `tune` while entry.so is not there
 //             <cache>/<name>-<key>/tune.so    the Q/R tuner (first tune or study
 //                                             with tuned noise; the heavier one)
 //   key       FNV-1a of the header text, estlab's version, commit and binary
@@ -21,6 +26,8 @@
 // Usage:
 //   const ModelEntry& m = LoadModelFile("examples/models/pendulum.model", {});
 //   const ModelEntry& t = LoadModelFile(path, {.tuner = true});   // m.tune set
+//   const ModelEntry& f = LoadModelFile(path, {.run = RunNeeds{.measurement = "sin",
+//                                                               .filter = 2}});
 //
 // WARNING: the libraries resolve estlab's own functions against the running
 // estlab binary (linked with its symbols exported); a program that links

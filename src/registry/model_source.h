@@ -24,6 +24,8 @@
 
 #include <string>
 
+#include "src/registry/registry.h"
+
 namespace estlab {
 
 // What one model file compiles into.
@@ -51,6 +53,15 @@ std::string ModelEntryUnit(const ModelSource& s, const std::string& header, Mode
                            bool with_tuner);
 // The tuner's translation unit (TuneModel<Model> instantiated), including `header`.
 std::string ModelTunerUnit(const ModelSource& s, const std::string& header, ModelLinkage linkage);
+
+// One command's parts of a plugin (src/run/run_parts.h): the library's
+// name in the cache folder, "run-<measurement>-<filter>[-adapt][-smooth][-sim]"
+// ("all" for every measurement or class, "none" for no filter), and its
+// translation unit. A measurement name that is not a C identifier (sensor
+// groups, "imu,gps") stands for every measurement: only identifiers enter the
+// generated code.
+std::string PartsLibraryName(const RunNeeds& needs);
+std::string ModelPartsUnit(const ModelSource& s, const std::string& header, const RunNeeds& needs);
 
 // What `estlab model source FILE --out DIR` writes, for static linking:
 // DIR/model.h (the generated header, or for a .h one line including it),

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,9 +99,20 @@ struct ModelEntry {
 // The built-in models (models/model_list.cmake), then linked ones (linked_models.h).
 const std::vector<const ModelEntry*>& AllModels();
 
+// One command's share of a model file's code (src/run/run_parts.h): a
+// `filter`, `smooth` or `simulate` of a model file whose whole entry is not
+// in the cache compiles only these parts, into a library of their own.
+struct RunNeeds {
+  std::string measurement = "";  // its name; "": every measurement
+  int filter = -1;               // index in FilterKindOptions; -1: every class, -2: none
+  bool adapt = false, smooth = false, simulate = false;
+};
+
 // What a command needs of a model compiled from a file (model_plugin.h).
 struct ModelNeeds {
   bool tuner = false;  // the Q/R tuner as well (compiled on its first use)
+  // Unset: the whole entry (every filter, the simulator).
+  std::optional<RunNeeds> run = std::nullopt;
 };
 // A built-in model by name, or a model file: a path to a .model or .h file,
 // or a name found on ESTLAB_MODEL_PATH (compiled on first use, cached).

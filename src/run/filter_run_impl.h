@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,7 @@
 #include "src/run/filter_spec.h"
 #include "src/run/first_sample.h"
 #include "src/run/group_nis.h"
+#include "src/run/run_parts.h"
 #include "src/run/smoother_recorder.h"
 #include "src/run/step_loop.h"
 
@@ -49,17 +51,46 @@ Mat<R, C> MatFromVector(const std::vector<double>& v) {
   return A;
 }
 
+// The refusal of a run that asks for a part its library was compiled
+// without (run_parts.h): the loader asks for the library of the same
+// request, so this is a bug, never the user's.
+[[noreturn]] inline void MissingRunPart(const std::string& part) {
+  throw std::logic_error("this model library was compiled without " + part +
+                         " (src/run/run_parts.h); delete the model cache to rebuild it");
+}
+
 // The filter of spec.filter: each options struct's MakeFilterFor overload
-// (src/filters/filters.h); a kind without one does not compile. Throws
-// InputError for invalid options.
-template <class Model, class Meas>
+// (src/filters/filters.h); a kind without one does not compile. Only the
+// classes in Parts are compiled. Throws InputError for invalid options.
+template <class Model, class Meas, class Parts = AllRunParts>
 std::unique_ptr<Filter<Model, Meas>> MakeFilter(const FilterSpec& spec,
                                                 const typename Model::Params& params,
                                                 Transition<Model>* transition) {
   return std::visit(
-      [&](const auto& options) { return MakeFilterFor<Model, Meas>(options, transition, params); },
+      [&](const auto& options) -> std::unique_ptr<Filter<Model, Meas>> {
+        if constexpr (HasFilter<Parts, std::decay_t<decltype(options)>>())
+          return MakeFilterFor<Model, Meas>(options, transition, params);
+        else
+          MissingRunPart(std::string("the filter ") + FilterKindName(KindOf(spec.filter)));
+      },
       spec.filter);
 }
+
+// Stand-ins for the noise adapter and the smoother in a run library compiled
+// without them (run_parts.h): never constructed (the run refuses a spec that
+// asks for them), they only let the run loop name their calls.
+template <int N, int M>
+struct AbsentAdapter {
+  void Observe(const StepResult<M>&, const Mat<N, N>&, const Mat<N, N>&, Mat<N, N>*, Mat<M, M>*) {}
+  long clip_count() const { return 0; }
+};
+template <int N>
+struct AbsentSmoother {
+  void OnPrior() {}
+  bool BeforePredict(double, double, const Mat<N, N>&, std::string*) { return true; }
+  bool AfterPredict(std::string*) { return true; }
+  size_t OnRow() { return 0; }
+};
 
 // One row of the forward pass: its belief (filtered, or smoothed after the
 // backward pass) and its innovation statistics.
@@ -295,28 +326,43 @@ void SmoothRecords(const FilterData& data, const RowLayout& layout,
 
 // With spec.smooth and moments, also the smoothed rows as typed moments
 // (SmoothedMoments; left empty when the run or the smoother fails).
-template <class Model, class Meas>
+// Parts (run_parts.h) says which filter classes, and whether the noise
+// adapter and the smoother, are compiled.
+template <class Model, class Meas, class Parts = AllRunParts>
 FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
                               std::vector<SmoothedMoments<Model::kStateDim>>* moments = nullptr) {
   constexpr int N = Model::kStateDim;
   constexpr int M = Meas::kDim;
   using StateCov = Mat<N, N>;
+  using Adapter = std::conditional_t<Parts::kAdapt, NoiseAdapter<N, M>, AbsentAdapter<N, M>>;
+  using Smoother =
+      std::conditional_t<Parts::kSmooth, SmootherRecorder<Model, Meas>, AbsentSmoother<N>>;
   const auto start = std::chrono::steady_clock::now();
   const typename Model::Params params = ParamsFromVector<Model>(spec.params);
   auto transition = MakeTransition<Model>(params, spec.transition);
-  auto filter = MakeFilter<Model, Meas>(spec, params, transition.get());
+  auto filter = MakeFilter<Model, Meas, Parts>(spec, params, transition.get());
   if (const std::string why = CheckInputWidths(spec, data, kInputDim<Model>); !why.empty())
     throw InputError(why);
   filter->SetInput(InputFrom<Model>(InputAtRow(spec, data, 0)));  // the transition's, or the KF's
 
-  std::optional<NoiseAdapter<N, M>> adapter;
-  if (!spec.adapt.rule.empty()) adapter.emplace(spec.adapt);
+  std::optional<Adapter> adapter;
+  if (!spec.adapt.rule.empty()) {
+    if constexpr (Parts::kAdapt)
+      adapter.emplace(spec.adapt);
+    else
+      MissingRunPart("the noise adapter");
+  }
   filter->SetPostFitResidual(adapter.has_value());  // the adapter's input only
   StateCov Q = spec.q_white_accel ? StateCov::Zero() : MatFromVector<N, N>(spec.q);
   bool q_adapted = false;
   Mat<M, M> R = MatFromVector<M, M>(spec.r);
-  std::optional<SmootherRecorder<Model, Meas>> smoother;
-  if (spec.smooth) smoother.emplace(spec, filter.get(), transition.get());
+  std::optional<Smoother> smoother;
+  if (spec.smooth) {
+    if constexpr (Parts::kSmooth)
+      smoother.emplace(spec, filter.get(), transition.get());
+    else
+      MissingRunPart("the smoother");
+  }
 
   FilterRunOutput out;
   FilterSummary& s = out.summary;
@@ -362,7 +408,7 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
   };
   auto row = [&](size_t k, const Vec<double, M>* z, const double* u) {
     StateCov p_pred = StateCov::Zero();
-    if (adapter) p_pred = filter->cov();  // the adapter's
+    if (adapter) p_pred = filter->cov();    // the adapter's
     filter->SetInput(InputFrom<Model>(u));  // u_k: seen by h(t, x, u), held over the next step
     filter->SetTime(data.t[k]);
     RowRecord<N, M> rec;
@@ -434,18 +480,24 @@ FilterRunOutput RunFilterWith(const FilterSpec& spec, const FilterData& data,
     EmitRows<Model, Meas>(records, data, layout, no_lag_one, &out.rows, &s);
   } else {
     timing(&s);  // the forward pass's, copied into s.forward
-    SmoothRecords<Model, Meas>(data, layout, &*smoother, &records, &out, moments);
+    if constexpr (Parts::kSmooth)
+      SmoothRecords<Model, Meas>(data, layout, &*smoother, &records, &out, moments);
   }
   timing(&s);
   return out;
 }
 
-// Dispatches on the measurement name.
-template <class Model>
+// Dispatches on the measurement name (those in Parts).
+template <class Model, class Parts = AllRunParts>
 FilterRunOutput RunFilter(const FilterSpec& spec, const FilterData& data) {
   FilterRunOutput out;
-  const bool found = VisitMeasurement<Model>(
-      spec.measurement, [&](auto m) { out = RunFilterWith<Model, decltype(m)>(spec, data); });
+  const bool found = VisitMeasurement<Model>(spec.measurement, [&](auto m) {
+    using Meas = decltype(m);
+    if constexpr (HasMeasurement<Parts, Model, Meas>())
+      out = RunFilterWith<Model, Meas, Parts>(spec, data);
+    else
+      MissingRunPart("the measurement " + spec.measurement);
+  });
   if (!found) throw InputError("unknown measurement '" + spec.measurement + "'");
   return out;
 }
