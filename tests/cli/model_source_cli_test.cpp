@@ -56,6 +56,39 @@ TEST(ModelSource, LinkedAndPluginEntriesShareAllButTheRegistration) {
             "ESTLAB_DEFINE_LINKED_MODEL(ESTLAB_MODEL_TYPE, false)\n");
 }
 
+// Issue 38: a command's parts unit (src/run/run_parts.h) spells out its
+// parts, names its library after them, and lets only a C identifier into
+// the code: a --measure of sensor groups, or anything else, compiles every
+// measurement and appears nowhere in the unit.
+TEST(ModelSource, PartsUnitNamesItsPartsAndOnlyAnIdentifierEntersTheCode) {
+  const ModelSource s = ReadModelSource(Source("examples/models/pendulum.model"));
+  const RunNeeds ukf{.measurement = "sin", .filter = 2, .adapt = true, .smooth = false};
+  EXPECT_EQ(PartsLibraryName(ukf), "run-sin-sigma-adapt");
+  const std::string unit = ModelPartsUnit(s, "model.h", ukf);
+  for (const char* line :
+       {"#include \"model.h\"\n", "#include \"src/registry/model_entry_impl.h\"\n",
+        "  static constexpr const char* kMeasurement = \"sin\";\n",
+        "  static constexpr int kFilter = 2;\n",
+        "  static constexpr bool kAdapt = true, kSmooth = false, kSimulate = false;\n",
+        "ESTLAB_DEFINE_MODEL_PARTS_PLUGIN(ESTLAB_MODEL_TYPE, EstlabRunParts)\n"})
+    EXPECT_NE(unit.find(line), std::string::npos) << line << "\n" << unit;
+  EXPECT_EQ(PartsLibraryName(RunNeeds{.filter = -2, .simulate = true}), "run-all-none-sim");
+  EXPECT_EQ(PartsLibraryName(RunNeeds{.measurement = "full", .smooth = true}),
+            "run-full-all-smooth");
+  for (const std::string odd : {"imu,gps", "sin\"; int x; //", "2sin", "s in", ""}) {
+    const RunNeeds needs{.measurement = odd, .filter = 0};
+    EXPECT_EQ(PartsLibraryName(needs), "run-all-kf") << odd;
+    const std::string text = ModelPartsUnit(s, "model.h", needs);
+    EXPECT_NE(text.find("kMeasurement = nullptr;"), std::string::npos) << odd;
+    if (!odd.empty()) {
+      EXPECT_EQ(text.find(odd), std::string::npos) << odd;
+    }
+  }
+  // A filter index out of range asks for every class.
+  EXPECT_NE(ModelPartsUnit(s, "model.h", RunNeeds{.filter = 9}).find("kFilter = -1;"),
+            std::string::npos);
+}
+
 TEST(ModelSource, CppHeaderIsIncludedByPathWithoutATunerUnit) {
   TempDir dir;
   const std::string header = Source("tests/plugin/data/spring.h");
