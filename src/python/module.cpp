@@ -76,11 +76,11 @@ std::vector<std::pair<std::string, std::string>> Options(const std::string& comm
 }
 
 // A model's description (`estlab list --model NAME --json`); compiles a
-// model file on first use, as the command line does.
+// model file's description alone on first use, as the command line does.
 std::string ModelJson(const std::string& name) {
   return CallGuard::Call(nullptr, nullptr, [&] {
     JsonWriter json;
-    cli::ModelJson(FindModel(name), &json);
+    cli::ModelJson(FindModel(name, {.run = RunNeeds{.filter = -2}}), &json);
     return json.str();
   });
 }
