@@ -20,6 +20,7 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include "estlab_plugin_config.h"
 #include "estlab_version.h"
@@ -171,6 +172,18 @@ std::string ReplaceAll(std::string text, const std::string& from, const std::str
   return text;
 }
 
+// The compiled libraries in `dir` (entry.so, tune.so, run-*.so), not the
+// NAME.PID.tmp.so of a compile in progress.
+std::vector<fs::path> Libraries(const fs::path& dir) {
+  std::vector<fs::path> found;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".so" &&
+        e.path().filename().string().find(".tmp") == std::string::npos)
+      found.push_back(e.path());
+  return found;
+}
+
 // The header the libraries of `dir` are compiled from: DIR/model.h, a copy
 // of the text the key was made of (a .model file's generated header, a C++
 // header's own text). When it is missing it is written; when it is not that
@@ -182,20 +195,12 @@ void EnsureSnapshot(const fs::path& dir, const std::string& text) {
   const fs::path header = dir / "model.h";
   std::error_code ec;
   if (fs::exists(header, ec) && ReadModelText(header.string()) == text) return;
-  for (const auto& e : fs::directory_iterator(dir, ec))  // entry.so, tune.so, run-*.so
-    if (e.path().extension() == ".so") fs::remove(e.path(), ec);
+  for (const fs::path& library : Libraries(dir)) fs::remove(library, ec);
   WriteAtomically(header, text);
 }
 
-// Whether `dir` holds a compiled library (entry.so, tune.so, run-*.so).
-bool HoldsLibrary(const fs::path& dir) {
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (e.path().extension() == ".so" && name.find(".tmp") == std::string::npos) return true;
-  }
-  return false;
-}
+// Whether `dir` holds a compiled library.
+bool HoldsLibrary(const fs::path& dir) { return !Libraries(dir).empty(); }
 
 // What a library holds, for the compile message.
 std::string WhatItHolds(const std::string& which) {
