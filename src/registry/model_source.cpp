@@ -47,9 +47,13 @@ bool IsIdentifier(const std::string& name) {
   return true;
 }
 
-// The measurement a parts library holds ("" for every one).
-std::string PartsMeasurement(const RunNeeds& needs) {
-  return IsIdentifier(needs.measurement) ? needs.measurement : "";
+// The parts a library holds: a measurement that is not an identifier is
+// every measurement (""), a filter index out of range every class (-1).
+RunNeeds PartsOf(RunNeeds needs) {
+  if (!IsIdentifier(needs.measurement)) needs.measurement.clear();
+  if (needs.filter < -2 || needs.filter >= int(std::variant_size_v<FilterKindOptions>))
+    needs.filter = -1;
+  return needs;
 }
 
 }  // namespace
@@ -122,33 +126,27 @@ std::string ModelTunerUnit(const ModelSource& s, const std::string& header, Mode
          "#pragma GCC visibility pop\n";
 }
 
-std::string PartsLibraryName(const RunNeeds& needs) {
-  static const char* const kFilters[] = {"kf", "ekf", "sigma", "pf"};
+std::string PartsLibraryName(const RunNeeds& request) {
+  static const char* const kFilters[] = {"kf", "ekf", "sigma", "pf"};  // FilterKindOptions
   static_assert(std::size(kFilters) == std::variant_size_v<FilterKindOptions>);
-  const std::string measurement = PartsMeasurement(needs);
-  std::string name = "run-" + (measurement.empty() ? std::string("all") : measurement) + "-";
-  if (needs.filter >= 0 && needs.filter < int(std::size(kFilters)))
-    name += kFilters[needs.filter];
-  else
-    name += needs.filter == -2 ? "none" : "all";
+  const RunNeeds needs = PartsOf(request);
+  std::string name = "run-" + (needs.measurement.empty() ? "all" : needs.measurement) + "-";
+  name += needs.filter >= 0 ? kFilters[needs.filter] : needs.filter == -2 ? "none" : "all";
   if (needs.adapt) name += "-adapt";
   if (needs.smooth) name += "-smooth";
   if (needs.simulate) name += "-sim";
   return name;
 }
 
-std::string ModelPartsUnit(const ModelSource& s, const std::string& header, const RunNeeds& needs) {
-  const std::string measurement = PartsMeasurement(needs);
-  const int filter =
-      needs.filter >= -2 && needs.filter < int(std::variant_size_v<FilterKindOptions>)
-          ? needs.filter
-          : -1;
+std::string ModelPartsUnit(const ModelSource& s, const std::string& header,
+                           const RunNeeds& request) {
+  const RunNeeds needs = PartsOf(request);
   auto flag = [](bool on) { return std::string(on ? "true" : "false"); };
   return UnitHead(s, header, "parts (" + PartsLibraryName(needs) + ")",
                   "src/registry/model_entry_impl.h") +
          "struct EstlabRunParts {\n  static constexpr const char* kMeasurement = " +
-         (measurement.empty() ? std::string("nullptr") : "\"" + measurement + "\"") +
-         ";\n  static constexpr int kFilter = " + std::to_string(filter) +
+         (needs.measurement.empty() ? std::string("nullptr") : "\"" + needs.measurement + "\"") +
+         ";\n  static constexpr int kFilter = " + std::to_string(needs.filter) +
          ";\n  static constexpr bool kAdapt = " + flag(needs.adapt) +
          ", kSmooth = " + flag(needs.smooth) + ", kSimulate = " + flag(needs.simulate) +
          ";\n};\n"
